@@ -1,0 +1,26 @@
+# The project's commands. See README.md.
+PY     := $(CURDIR)/.venv/bin/python
+BUILD  := build/host
+
+.PHONY: setup build test bench lint clean
+
+setup:            ## install Debian + pinned PyPI dependencies, create .venv (idempotent; root)
+	bash scripts/setup.sh
+
+build:            ## configure and build the C++ host library, tests and Python bindings
+	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
+	cmake -S host -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
+	cmake --build $(BUILD)
+
+test: build       ## every test of every part
+	ctest --test-dir $(BUILD) --output-on-failure
+	$(PY) -m pytest -q
+
+bench: build      ## benchmarks, one JSON object per line
+	@OPENBLAS_NUM_THREADS=1 $(PY) -m mocap.cli bench
+
+clean:
+	rm -rf build
+
+lint:             ## static checks of the Python code
+	$(CURDIR)/.venv/bin/ruff check host/python

@@ -1,0 +1,89 @@
+// What the solver is given each frame, and what it gives back.
+//
+// Any subset of cameras and IMUs may appear in a frame; missing ones are simply absent.
+// Quaternions: Eigen::Quaterniond, constructed (w, x, y, z), stored (x, y, z, w).
+#ifndef MOCAP_OBSERVATIONS_H_
+#define MOCAP_OBSERVATIONS_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace mocap {
+
+struct Keypoint2D {
+  double x = 0, y = 0;      // pixels, distorted image
+  double confidence = 0;    // [0, 1]; 0 means "not detected"
+};
+
+struct CameraObservation {
+  int camera = 0;                      // index into the rig
+  std::vector<Keypoint2D> keypoints;   // in the layout's order, one per keypoint
+};
+
+struct ImuObservation {
+  int imu = 0;                                    // index into the IMU sites
+  Eigen::Quaterniond orientation{1, 0, 0, 0};     // R_i: sensor -> IMU reference frame
+  Eigen::Vector3d acceleration{0, 0, 0};          // a_i: m/s^2, sensor frame, gravity included
+  bool has_orientation = true;
+  bool has_acceleration = true;
+};
+
+struct FrameObservations {
+  double timestamp = 0;  // seconds on the shared timebase; must increase frame to frame
+  std::vector<CameraObservation> cameras;
+  std::vector<ImuObservation> imus;
+};
+
+enum class SolveStatus {
+  kOk,                // solved from the warm start
+  kInitialised,       // first frame (or after a reset): solved from an initial guess
+  kNoObservations,    // nothing usable in the frame: the previous pose is held
+  kRejectedFrame,     // timestamp not finite or not after the previous frame
+  kFailed,            // the optimiser failed: the previous pose is held
+};
+const char* ToString(SolveStatus status);
+
+// Quality flags (bit mask).
+enum QualityFlag : uint32_t {
+  kPositionUnconstrained = 1u << 0,  // no camera constrained the pose: global position drifts
+  kIterationLimit = 1u << 1,         // stopped at the iteration limit, not by convergence
+  kAccelerationUnavailable = 1u << 2,  // no acceleration history (first frames, after a gap)
+};
+
+// Per-term cost E = sum of rho(|r|^2) at the solution, as on the slide.
+struct TermCosts {
+  double orientation = 0, position = 0, acceleration = 0, pca_projection = 0, pca_deviation = 0;
+};
+
+// What happened to the frame's inputs: every observation is used or counted once.
+struct InputCounts {
+  int keypoints_used = 0;
+  int keypoints_not_detected = 0;   // confidence at or below the threshold
+  int keypoints_invalid = 0;        // NaN / inf, confidence out of range, far outside the image
+  int keypoints_behind_camera = 0;  // site behind the camera at the start of the solve
+  int orientations_used = 0;
+  int orientations_invalid = 0;     // NaN or not a unit quaternion
+  int accelerations_used = 0;
+  int accelerations_invalid = 0;    // NaN / inf
+  int unknown_sources = 0;          // camera or IMU index not in the rig / IMU set, or duplicate
+};
+
+struct SolveResult {
+  SolveStatus status = SolveStatus::kNoObservations;
+  Eigen::VectorXd theta;     // always finite
+  double timestamp = 0;
+  TermCosts costs;
+  InputCounts counts;
+  uint32_t flags = 0;
+  int iterations = 0;
+  double solve_time_ms = 0;  // wall time of Solve()
+  std::string message;       // human-readable reason when status is not kOk
+};
+
+}  // namespace mocap
+
+#endif  // MOCAP_OBSERVATIONS_H_

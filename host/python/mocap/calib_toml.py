@@ -1,0 +1,53 @@
+"""Read the Pose2Sim / anipose `Calib.toml` camera layout into a rig.
+
+Each camera is a table with `size` [w, h] (px), `matrix` (OpenCV K), `distortions`
+[k1, k2, p1, p2] (k3 optional as a fifth value), `rotation` (Rodrigues vector, world ->
+camera) and `translation` (metres, world -> camera); a `[metadata]` table is ignored.
+Fisheye cameras are refused: the solver models OpenCV's pinhole distortion only.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, rotations
+from mocap.errors import InputError
+
+
+def _camera(key: str, table: dict) -> _core.Camera:
+    try:
+        k = np.asarray(table["matrix"], dtype=float)
+        size = [int(round(v)) for v in table["size"]]
+        dist = [float(v) for v in table["distortions"]]
+        rvec = np.asarray(table["rotation"], dtype=float)
+        tvec = np.asarray(table["translation"], dtype=float)
+    except (KeyError, TypeError, ValueError) as e:
+        raise InputError(f"camera [{key}]: missing or malformed field ({e})") from None
+    if table.get("fisheye", False):
+        raise InputError(f"camera [{key}]: fisheye cameras are not supported")
+    if k.shape != (3, 3) or rvec.shape != (3,) or tvec.shape != (3,) or len(dist) not in (4, 5) or len(size) != 2:
+        raise InputError(f"camera [{key}]: wrong array sizes")
+    cam = _core.Camera()
+    cam.name = str(table.get("name", key))
+    cam.width, cam.height = size
+    cam.fx, cam.fy, cam.cx, cam.cy = k[0, 0], k[1, 1], k[0, 2], k[1, 2]
+    cam.distortion = (dist + [0.0])[:5]
+    cam.rotation = rotations.exp(rvec)
+    cam.translation = tvec
+    return cam
+
+
+def load(path: str | Path) -> _core.Rig:
+    try:
+        data = tomllib.loads(Path(path).read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"{path}: {e}") from None
+    cams = [_camera(key, t) for key, t in data.items() if key != "metadata" and isinstance(t, dict)]
+    if not cams:
+        raise InputError(f"{path}: no camera tables")
+    # Round-trip through the rig parser, which validates every camera.
+    rig = _core.Rig(cams)
+    return _core.Rig.from_json(rig.to_json())

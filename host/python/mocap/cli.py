@@ -1,0 +1,81 @@
+"""The `mocap` command: one entry point for every part of the system."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+from mocap.errors import DataMissingError, MocapError
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from mocap import bench
+
+    if "solver" in args.only:
+        try:
+            print(json.dumps(bench.solver(rate=args.rate, seed=args.seed)), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
+    return 0
+
+
+def _skeleton(args: argparse.Namespace) -> int:
+    from mocap import _core, bvh, retarget
+
+    motion = bvh.load(args.from_bvh)
+    mapping = retarget.map_joints(motion, "auto" if args.scale == "auto" else float(args.scale))
+    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+    with open(args.out, "w") as f:
+        f.write(skeleton.to_json() + "\n")
+    logging.info("wrote %s (units scale %.6g, rest height %.3f m)", args.out, mapping.scale, skeleton.rest_height())
+    return 0
+
+
+def _rig(args: argparse.Namespace) -> int:
+    from mocap import calib_toml
+
+    rig = calib_toml.load(args.from_calib_toml)
+    with open(args.out, "w") as f:
+        f.write(rig.to_json() + "\n")
+    logging.info("wrote %s (%d cameras)", args.out, len(rig.cameras))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="mocap", description="Real-time motion capture from video and IMUs.")
+    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
+    b.add_argument("--only", nargs="+", default=["solver"], choices=["solver"], help="benchmarks to run")
+    b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
+    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.set_defaults(func=_bench)
+
+    s = sub.add_parser("skeleton", help="write a solver skeleton file from a BVH hierarchy")
+    s.add_argument("--from-bvh", required=True, help="BVH file whose hierarchy gives the bone offsets")
+    s.add_argument("--scale", default="auto", help="file units to metres, or 'auto' (default)")
+    s.add_argument("--out", required=True, help="skeleton JSON to write")
+    s.set_defaults(func=_skeleton)
+
+    r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
+    r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")
+    r.add_argument("--out", required=True, help="rig JSON to write")
+    r.set_defaults(func=_rig)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(message)s")
+    try:
+        return args.func(args)
+    except (MocapError, OSError, ValueError) as e:
+        print(f"mocap {args.command}: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,107 @@
+"""BVH parsing, joint correspondence and the pose vectors it produces."""
+
+import numpy as np
+import pytest
+
+from mocap import _core, bvh, retarget
+from mocap.errors import InputError
+
+# A small MotionBuilder-style clip: y up, left +x, facing +z, centimetres.
+CLIP = """HIERARCHY
+ROOT Hips
+{
+ OFFSET 0 0 0
+ CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+ JOINT Spine { OFFSET 0 10 0 CHANNELS 3 Zrotation Xrotation Yrotation
+  JOINT Spine1 { OFFSET 0 20 0 CHANNELS 3 Zrotation Xrotation Yrotation
+   JOINT Neck { OFFSET 0 22 0 CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT Head { OFFSET 0 10 0 CHANNELS 3 Zrotation Xrotation Yrotation End Site { OFFSET 0 18 0 } } }
+   JOINT LeftShoulder { OFFSET 2 17 0 CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT LeftArm { OFFSET 16 0 0 CHANNELS 3 Zrotation Xrotation Yrotation
+     JOINT LeftForeArm { OFFSET 28 0 0 CHANNELS 3 Zrotation Xrotation Yrotation
+      JOINT LeftHand { OFFSET 26 0 0 CHANNELS 3 Zrotation Xrotation Yrotation End Site { OFFSET 10 0 0 } } } } }
+   JOINT RightShoulder { OFFSET -2 17 0 CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT RightArm { OFFSET -16 0 0 CHANNELS 3 Zrotation Xrotation Yrotation
+     JOINT RightForeArm { OFFSET -28 0 0 CHANNELS 3 Zrotation Xrotation Yrotation
+      JOINT RightHand { OFFSET -26 0 0 CHANNELS 3 Zrotation Xrotation Yrotation End Site { OFFSET -10 0 0 } } } } } } }
+ JOINT LeftUpLeg { OFFSET 9 -2 0 CHANNELS 3 Zrotation Xrotation Yrotation
+  JOINT LeftLeg { OFFSET 0 -42 0 CHANNELS 3 Zrotation Xrotation Yrotation
+   JOINT LeftFoot { OFFSET 0 -41 0 CHANNELS 3 Zrotation Xrotation Yrotation End Site { OFFSET 0 -6 14 } } } }
+ JOINT RightUpLeg { OFFSET -9 -2 0 CHANNELS 3 Zrotation Xrotation Yrotation
+  JOINT RightLeg { OFFSET 0 -42 0 CHANNELS 3 Zrotation Xrotation Yrotation
+   JOINT RightFoot { OFFSET 0 -41 0 CHANNELS 3 Zrotation Xrotation Yrotation End Site { OFFSET 0 -6 14 } } } }
+}
+MOTION
+Frames: 2
+Frame Time: 0.0083333
+"""
+WIDTH = 6 + 3 * 18
+
+
+def clip(frames: np.ndarray) -> bvh.Motion:
+    body = "\n".join(" ".join(f"{v:.6f}" for v in row) for row in frames)
+    return bvh.parse(CLIP + body + "\n")
+
+
+def test_channels_are_applied_in_the_file_order():
+    frames = np.zeros((2, WIDTH))
+    frames[1, 3:6] = [90.0, 90.0, 0.0]  # Zrotation 90 then Xrotation 90: R = Rz Rx
+    rot, _ = clip(frames).global_transforms()
+    rz = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])
+    rx = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0.0]])
+    np.testing.assert_allclose(rot[1, 0], rz @ rx, atol=1e-12)
+
+
+def test_correspondence_units_and_axes():
+    motion = clip(np.zeros((2, WIDTH)))
+    mapping = retarget.map_joints(motion)
+    assert mapping.scale == 0.01  # centimetres
+    names = [motion.joints[j].name if j is not None else None for j in mapping.joint]
+    assert names[retarget.BONES.index("clavicle_l")] == "LeftShoulder"
+    assert names[retarget.BONES.index("upper_arm_l")] == "LeftArm"
+    assert names[retarget.BONES.index("toes_l")] is None  # sits at the foot's End Site
+    # BVH left (+x) becomes solver left (+y); BVH forward (+z) becomes solver +x.
+    np.testing.assert_allclose(mapping.offsets[retarget.BONES.index("thigh_l")], [0, 0.09, -0.02], atol=1e-12)
+    np.testing.assert_allclose(mapping.offsets[retarget.BONES.index("toes_l")], [0.14, 0, -0.06], atol=1e-12)
+
+
+def test_poses_reproduce_the_clips_joint_positions():
+    rng = np.random.default_rng(0)
+    frames = rng.uniform(-40, 40, size=(2, WIDTH))
+    frames[:, 0:3] = [[10, 95, -20], [12, 94, -18]]
+    motion = clip(frames)
+    mapping = retarget.map_joints(motion)
+    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+    thetas = retarget.poses(motion, mapping)
+    rot, pos = motion.global_transforms()
+    for f in range(2):
+        r_solver, p_solver = skeleton.forward_kinematics(thetas[f])
+        for b, j in enumerate(mapping.joint):
+            if j is None:
+                continue
+            np.testing.assert_allclose(p_solver[b], retarget.P @ pos[f, j] * 0.01, atol=1e-9)
+            np.testing.assert_allclose(r_solver[b], retarget.P @ rot[f, j] @ retarget.P.T, atol=1e-9)
+
+
+def test_malformed_files_raise_input_errors():
+    with pytest.raises(InputError, match="HIERARCHY"):
+        bvh.parse("MOTION")
+    with pytest.raises(InputError, match="frames present"):
+        bvh.parse(CLIP + "0 0 0\n")
+    motion = clip(np.zeros((2, WIDTH)))
+    motion.joints[motion.index("Head")].name = "Skull"
+    with pytest.raises(InputError, match="head"):
+        retarget.map_joints(motion)
+
+
+def test_real_clips_of_every_convention_map(shared):
+    for relative in ("data/mocap/cmu-131/131_01.bvh", "data/mocap/cmu-daz/05_01.bvh", "data/mocap/xia/neutral_01_000.bvh"):
+        motion = bvh.load(shared / relative)
+        mapping = retarget.map_joints(motion)
+        skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+        assert 1.1 < skeleton.rest_height() < 1.8, relative
+        thetas = retarget.poses(motion, mapping)
+        assert np.isfinite(thetas).all()
+        # Upright after the axis change: the head is well above the pelvis mid-clip.
+        _, pos = skeleton.forward_kinematics(thetas[len(thetas) // 2])
+        assert pos[retarget.BONES.index("head")][2] > pos[0][2] + 0.3, relative

@@ -1,0 +1,141 @@
+#include "mocap/camera.h"
+
+#include <cmath>
+
+#include "json_util.h"
+#include "mocap/so3.h"
+
+namespace mocap {
+
+bool Camera::Project(const Eigen::Vector3d& x, Eigen::Vector2d* pixel,
+                     Eigen::Matrix<double, 2, 3>* d_pixel_d_x) const {
+  const Eigen::Vector3d xc = rotation * x + translation;
+  if (!(xc.z() > kMinDepth)) return false;
+  const double iz = 1.0 / xc.z();
+  const double u = xc.x() * iz, v = xc.y() * iz;
+  const auto& [k1, k2, p1, p2, k3] = distortion;
+  const double r2 = u * u + v * v;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  const double xd = u * radial + 2.0 * p1 * u * v + p2 * (r2 + 2.0 * u * u);
+  const double yd = v * radial + p1 * (r2 + 2.0 * v * v) + 2.0 * p2 * u * v;
+  *pixel = Eigen::Vector2d(fx * xd + cx, fy * yd + cy);
+  if (d_pixel_d_x != nullptr) {
+    const double dradial_dr2 = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+    const double dru = 2.0 * u * dradial_dr2, drv = 2.0 * v * dradial_dr2;
+    Eigen::Matrix2d d_dist;  // d(x_d, y_d) / d(u, v)
+    d_dist << radial + u * dru + 2.0 * p1 * v + 6.0 * p2 * u, u * drv + 2.0 * p1 * u + 2.0 * p2 * v,
+        v * dru + 2.0 * p1 * u + 2.0 * p2 * v, radial + v * drv + 6.0 * p1 * v + 2.0 * p2 * u;
+    Eigen::Matrix<double, 2, 3> d_uv;  // d(u, v) / d(X_cam)
+    d_uv << iz, 0.0, -u * iz, 0.0, iz, -v * iz;
+    const Eigen::Matrix2d f = Eigen::Vector2d(fx, fy).asDiagonal();
+    *d_pixel_d_x = f * d_dist * d_uv * rotation;
+  }
+  return true;
+}
+
+Eigen::Vector2d Camera::Undistort(const Eigen::Vector2d& pixel) const {
+  const auto& [k1, k2, p1, p2, k3] = distortion;
+  const double xd = (pixel.x() - cx) / fx, yd = (pixel.y() - cy) / fy;
+  double u = xd, v = yd;
+  for (int it = 0; it < 20; ++it) {
+    const double r2 = u * u + v * v;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double dx = 2.0 * p1 * u * v + p2 * (r2 + 2.0 * u * u);
+    const double dy = p1 * (r2 + 2.0 * v * v) + 2.0 * p2 * u * v;
+    u = (xd - dx) / radial;
+    v = (yd - dy) / radial;
+  }
+  return {u, v};
+}
+
+bool Camera::IsValid(std::string* error) const {
+  if (!(fx > 0 && fy > 0 && std::isfinite(cx) && std::isfinite(cy))) {
+    *error = "camera '" + name + "': focal lengths must be positive and the centre finite";
+    return false;
+  }
+  if (width <= 0 || height <= 0) {
+    *error = "camera '" + name + "': image size must be positive";
+    return false;
+  }
+  for (double d : distortion) {
+    if (!std::isfinite(d)) {
+      *error = "camera '" + name + "': distortion must be finite";
+      return false;
+    }
+  }
+  if (!rotation.allFinite() || !translation.allFinite() ||
+      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() > 1e-6) {
+    *error = "camera '" + name + "': rotation must be a rotation and the translation finite";
+    return false;
+  }
+  return true;
+}
+
+bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
+  nlohmann::json j;
+  if (!internal::ParseJson(text, &j, error)) return false;
+  if (!j.is_object() || j.value("format", "") != "mocap.rig/1" || !j.contains("cameras") ||
+      !j["cameras"].is_array()) {
+    *error = "not a mocap.rig/1 file";
+    return false;
+  }
+  Rig rig;
+  for (const auto& jc : j["cameras"]) {
+    Camera c;
+    Eigen::Vector3d rotvec;
+    if (!jc.is_object()) {
+      *error = "camera entry is not an object";
+      return false;
+    }
+    c.name = jc.value("name", "cam" + std::to_string(rig.cameras.size()));
+    const bool ok = jc.contains("width") && jc.contains("height") && jc["width"].is_number_integer() &&
+                    jc["height"].is_number_integer() && jc.contains("fx") && jc.contains("fy") &&
+                    jc.contains("cx") && jc.contains("cy") && jc["fx"].is_number() &&
+                    jc["fy"].is_number() && jc["cx"].is_number() && jc["cy"].is_number() &&
+                    jc.contains("rotation") && internal::ReadVector3(jc["rotation"], &rotvec) &&
+                    jc.contains("translation") && internal::ReadVector3(jc["translation"], &c.translation) &&
+                    (!jc.contains("distortion") || internal::ReadVector(jc["distortion"], 5, c.distortion.data()));
+    if (!ok) {
+      *error = "camera '" + c.name + "': missing or malformed field";
+      return false;
+    }
+    c.width = jc["width"].get<int>();
+    c.height = jc["height"].get<int>();
+    c.fx = jc["fx"].get<double>();
+    c.fy = jc["fy"].get<double>();
+    c.cx = jc["cx"].get<double>();
+    c.cy = jc["cy"].get<double>();
+    c.rotation = Exp(rotvec);
+    if (!c.IsValid(error)) return false;
+    rig.cameras.push_back(c);
+  }
+  *out = std::move(rig);
+  return true;
+}
+
+bool LoadRigJson(const std::string& path, Rig* out, std::string* error) {
+  std::string text;
+  if (!internal::ReadTextFile(path, &text, error)) return false;
+  if (!ParseRigJson(text, out, error)) {
+    *error = path + ": " + *error;
+    return false;
+  }
+  return true;
+}
+
+std::string RigToJson(const Rig& rig) {
+  nlohmann::json j;
+  j["format"] = "mocap.rig/1";
+  j["cameras"] = nlohmann::json::array();
+  for (const Camera& c : rig.cameras) {
+    const Eigen::Vector3d r = Log(c.rotation);
+    j["cameras"].push_back({{"name", c.name}, {"width", c.width}, {"height", c.height},
+                            {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+                            {"distortion", c.distortion},
+                            {"rotation", {r.x(), r.y(), r.z()}},
+                            {"translation", {c.translation.x(), c.translation.y(), c.translation.z()}}});
+  }
+  return j.dump(2);
+}
+
+}  // namespace mocap

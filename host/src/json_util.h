@@ -1,0 +1,55 @@
+// Small helpers for the JSON files of the host library (nlohmann::json).
+#ifndef MOCAP_SRC_JSON_UTIL_H_
+#define MOCAP_SRC_JSON_UTIL_H_
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+namespace mocap {
+namespace internal {
+
+inline bool ReadTextFile(const std::string& path, std::string* text, std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    *error = "cannot open " + path;
+    return false;
+  }
+  std::stringstream ss;
+  ss << in.rdbuf();
+  *text = ss.str();
+  return true;
+}
+
+// Parses text; on failure sets *error and returns false.
+inline bool ParseJson(const std::string& text, nlohmann::json* out, std::string* error) {
+  *out = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (out->is_discarded()) {
+    *error = "invalid JSON";
+    return false;
+  }
+  return true;
+}
+
+// Reads a JSON array of n finite numbers.
+inline bool ReadVector(const nlohmann::json& j, int n, double* out) {
+  if (!j.is_array() || static_cast<int>(j.size()) != n) return false;
+  for (int i = 0; i < n; ++i) {
+    if (!j[i].is_number()) return false;
+    out[i] = j[i].get<double>();
+    if (!std::isfinite(out[i])) return false;
+  }
+  return true;
+}
+
+inline bool ReadVector3(const nlohmann::json& j, Eigen::Vector3d* v) {
+  return ReadVector(j, 3, v->data());
+}
+
+}  // namespace internal
+}  // namespace mocap
+
+#endif  // MOCAP_SRC_JSON_UTIL_H_

@@ -1,0 +1,356 @@
+#include "mocap/solver.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <ceres/ceres.h>
+
+#include "mocap/initialisation.h"
+#include "mocap/residuals/acceleration_residual.h"
+#include "mocap/residuals/orientation_residual.h"
+#include "mocap/residuals/pca_prior_residuals.h"
+#include "mocap/residuals/position_residual.h"
+#include "mocap/so3.h"
+
+namespace mocap {
+
+const char* ToString(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kOk: return "ok";
+    case SolveStatus::kInitialised: return "initialised";
+    case SolveStatus::kNoObservations: return "no_observations";
+    case SolveStatus::kRejectedFrame: return "rejected_frame";
+    case SolveStatus::kFailed: return "failed";
+  }
+  return "unknown";
+}
+
+namespace {
+
+bool TermIsValid(const TermOptions& t, const char* name, std::string* error) {
+  if (!(std::isfinite(t.weight) && t.weight >= 0.0 && std::isfinite(t.loss_scale) && t.loss_scale > 0.0)) {
+    *error = std::string(name) + ": weight must be >= 0 and loss_scale > 0";
+    return false;
+  }
+  return true;
+}
+
+ceres::LossFunction* MakeLoss(const TermOptions& t) {
+  switch (t.loss) {
+    case LossType::kCauchy: return new ceres::CauchyLoss(t.loss_scale);
+    case LossType::kHuber: return new ceres::HuberLoss(t.loss_scale);
+    case LossType::kTrivial: return nullptr;
+  }
+  return nullptr;
+}
+
+bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
+
+// Position loss scale multiplier of the coarse pass of an initialisation.
+constexpr double kCoarseLossBoost = 1e4;
+
+}  // namespace
+
+bool SolverOptions::IsValid(std::string* error) const {
+  if (!TermIsValid(orientation, "orientation", error) || !TermIsValid(position, "position", error) ||
+      !TermIsValid(acceleration, "acceleration", error) ||
+      !TermIsValid(pca_projection, "pca_projection", error) ||
+      !TermIsValid(pca_deviation, "pca_deviation", error)) {
+    return false;
+  }
+  if (!accel_at_rest.allFinite() || !(min_confidence >= 0.0 && min_confidence < 1.0) ||
+      !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) || max_iterations < 1 ||
+      max_initial_iterations < 1 || !(function_tolerance >= 0.0) ||
+      !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0)) {
+    *error = "solver options out of range";
+    return false;
+  }
+  return true;
+}
+
+struct Solver::CleanFrame {
+  double timestamp = 0;
+  std::vector<Detection> detections;
+  std::vector<std::optional<Eigen::Matrix3d>> imu_world;    // R_ig R_i per IMU site
+  std::vector<std::optional<Eigen::Vector3d>> accel_world;  // R_ig R_i a_i - a_g per IMU site
+};
+
+std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayout layout,
+                                       std::vector<ImuSite> imus, std::optional<PosePrior> prior,
+                                       SolverOptions options, std::string* error) {
+  if (skeleton.num_bones() == 0) {
+    *error = "empty skeleton";
+    return nullptr;
+  }
+  for (const Camera& c : rig.cameras) {
+    if (!c.IsValid(error)) return nullptr;
+  }
+  for (const Site& s : layout.sites) {
+    if (s.bone < 0 || s.bone >= skeleton.num_bones() || !s.offset.allFinite()) {
+      *error = "layout '" + layout.name + "' has a site on an unknown bone";
+      return nullptr;
+    }
+  }
+  for (const ImuSite& s : imus) {
+    if (s.bone < 0 || s.bone >= skeleton.num_bones()) {
+      *error = "IMU '" + s.name + "' is on an unknown bone";
+      return nullptr;
+    }
+  }
+  if (prior) {
+    if (!prior->IsValid(error)) return nullptr;
+    if (prior->dof() != skeleton.pose_dim() - 6) {
+      *error = "prior has " + std::to_string(prior->dof()) + " DOF, the skeleton " +
+               std::to_string(skeleton.pose_dim() - 6);
+      return nullptr;
+    }
+  }
+  if (!options.IsValid(error)) return nullptr;
+  std::unique_ptr<Solver> s(new Solver());
+  s->skeleton_ = std::move(skeleton);
+  s->rig_ = std::move(rig);
+  s->layout_ = std::move(layout);
+  s->imus_ = std::move(imus);
+  s->prior_ = std::move(prior);
+  s->options_ = options;
+  s->Reset();
+  return s;
+}
+
+void Solver::Reset() {
+  theta_ = Eigen::VectorXd::Zero(skeleton_.pose_dim());
+  initialised_ = false;
+  history_.clear();
+  last_accel_.assign(imus_.size(), std::nullopt);
+}
+
+void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
+  if (theta.size() != skeleton_.pose_dim() || !theta.allFinite()) return;
+  theta_ = theta;
+  initialised_ = true;
+}
+
+Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts* counts) const {
+  CleanFrame clean;
+  clean.timestamp = frame.timestamp;
+  clean.imu_world.assign(imus_.size(), std::nullopt);
+  clean.accel_world.assign(imus_.size(), std::nullopt);
+  std::vector<bool> camera_seen(rig_.cameras.size(), false);
+  for (const CameraObservation& obs : frame.cameras) {
+    if (obs.camera < 0 || obs.camera >= static_cast<int>(rig_.cameras.size()) ||
+        camera_seen[obs.camera] || static_cast<int>(obs.keypoints.size()) != layout_.size()) {
+      ++counts->unknown_sources;
+      continue;
+    }
+    camera_seen[obs.camera] = true;
+    const Camera& cam = rig_.cameras[obs.camera];
+    for (int k = 0; k < layout_.size(); ++k) {
+      const Keypoint2D& kp = obs.keypoints[k];
+      const bool finite = std::isfinite(kp.x) && std::isfinite(kp.y) && std::isfinite(kp.confidence);
+      const bool plausible = finite && kp.confidence >= 0.0 && kp.confidence <= 1.0 + 1e-9 &&
+                             kp.x > -cam.width && kp.x < 2.0 * cam.width &&
+                             kp.y > -cam.height && kp.y < 2.0 * cam.height;
+      if (!plausible) {
+        ++counts->keypoints_invalid;
+      } else if (kp.confidence <= options_.min_confidence) {
+        ++counts->keypoints_not_detected;
+      } else {
+        clean.detections.push_back({obs.camera, k, {kp.x, kp.y}, std::min(kp.confidence, 1.0)});
+      }
+    }
+  }
+  std::vector<bool> imu_seen(imus_.size(), false);
+  for (const ImuObservation& obs : frame.imus) {
+    if (obs.imu < 0 || obs.imu >= static_cast<int>(imus_.size()) || imu_seen[obs.imu]) {
+      ++counts->unknown_sources;
+      continue;
+    }
+    imu_seen[obs.imu] = true;
+    const double qn = obs.orientation.norm();
+    const bool q_ok = obs.has_orientation && obs.orientation.coeffs().allFinite() &&
+                      std::abs(qn - 1.0) <= options_.max_quaternion_error;
+    if (obs.has_orientation && !q_ok) ++counts->orientations_invalid;
+    if (!q_ok) {
+      if (obs.has_acceleration) ++counts->accelerations_invalid;  // cannot reach world frame
+      continue;
+    }
+    const Eigen::Matrix3d world =
+        imus_[obs.imu].reference * Eigen::Quaterniond(obs.orientation.coeffs() / qn).toRotationMatrix();
+    clean.imu_world[obs.imu] = world;
+    if (obs.has_acceleration) {
+      if (obs.acceleration.allFinite()) {
+        clean.accel_world[obs.imu] = world * obs.acceleration - options_.accel_at_rest;
+      } else {
+        ++counts->accelerations_invalid;
+      }
+    }
+  }
+  return clean;
+}
+
+void Solver::Remember(const CleanFrame& frame) {
+  BodyPose pose;
+  ForwardKinematics(skeleton_, theta_.data(), &pose);
+  SolvedFrame solved{frame.timestamp, {}};
+  for (const ImuSite& s : imus_) {
+    solved.imu_sites.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
+  }
+  if (history_.size() == 2) history_.erase(history_.begin());
+  history_.push_back(std::move(solved));
+  last_accel_ = frame.accel_world;
+}
+
+bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
+                      Eigen::VectorXd* x, SolveResult* result) const {
+  TermOptions position_term = options_.position;
+  position_term.loss_scale *= position_loss_boost;
+  KinematicsCache fk(&skeleton_);
+  BodyPose start_pose;
+  ForwardKinematics(skeleton_, x->data(), &start_pose);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  for (int b = 0; b < skeleton_.num_bones(); ++b) {
+    problem.AddParameterBlock(x->data() + BlockOffset(b), BlockSize(b));
+  }
+  std::vector<ceres::ResidualBlockId> blocks[5];  // R, P, A, PP, PD
+
+  if (Active(options_.position)) {
+    for (const Detection& d : frame.detections) {
+      const Site& site = layout_.sites[d.keypoint];
+      const Camera& cam = rig_.cameras[d.camera];
+      Eigen::Vector2d pixel;
+      if (!cam.Project(start_pose.position[site.bone] + start_pose.rotation[site.bone] * site.offset, &pixel)) {
+        ++result->counts.keypoints_behind_camera;
+        continue;
+      }
+      blocks[1].push_back(problem.AddResidualBlock(
+          new PositionResidual(&fk, &cam, site, d.pixel, d.confidence, options_.position.weight),
+          MakeLoss(position_term), ChainBlocks(skeleton_, site.bone, x->data())));
+    }
+  }
+  result->counts.keypoints_used = static_cast<int>(blocks[1].size());
+
+  const bool have_history = history_.size() == 2;
+  const double h2 = have_history ? frame.timestamp - history_[1].timestamp : 0.0;
+  const double h1 = have_history ? history_[1].timestamp - history_[0].timestamp : 0.0;
+  const bool accel_ready = have_history && h1 > 0.0 && h2 > 0.0 &&
+                           h1 <= options_.max_history_gap && h2 <= options_.max_history_gap;
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (frame.imu_world[i] && Active(options_.orientation)) {
+      blocks[0].push_back(problem.AddResidualBlock(
+          new OrientationResidual(&fk, imus_[i], *frame.imu_world[i], options_.orientation.weight),
+          MakeLoss(options_.orientation), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+    }
+    if (accel_ready && last_accel_[i] && Active(options_.acceleration)) {
+      blocks[2].push_back(problem.AddResidualBlock(
+          new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i],
+                                   h1, h2, *last_accel_[i], options_.acceleration.weight),
+          MakeLoss(options_.acceleration), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+    }
+  }
+  result->counts.orientations_used = static_cast<int>(blocks[0].size());
+  result->counts.accelerations_used = static_cast<int>(blocks[2].size());
+
+  std::vector<double*> joint_blocks;
+  for (int b = 1; b < skeleton_.num_bones(); ++b) joint_blocks.push_back(x->data() + BlockOffset(b));
+  if (prior_ && Active(options_.pca_projection) && prior_->rank() < prior_->dof()) {
+    blocks[3].push_back(problem.AddResidualBlock(
+        new PcaProjectionResidual(*prior_, options_.pca_projection.weight),
+        MakeLoss(options_.pca_projection), joint_blocks));
+  }
+  if (prior_ && Active(options_.pca_deviation)) {
+    blocks[4].push_back(problem.AddResidualBlock(
+        new PcaDeviationResidual(*prior_, options_.pca_deviation.weight),
+        MakeLoss(options_.pca_deviation), joint_blocks));
+  }
+  if (blocks[0].empty() && blocks[1].empty()) {
+    result->status = SolveStatus::kNoObservations;
+    result->message = "every detection was behind its camera or a term is off";
+    return false;
+  }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+  so.max_num_iterations = max_iterations;
+  so.function_tolerance = options_.function_tolerance;
+  so.gradient_tolerance = options_.gradient_tolerance;
+  so.parameter_tolerance = options_.parameter_tolerance;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  result->iterations = static_cast<int>(summary.iterations.size()) - 1;
+
+  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() || !x->allFinite()) {
+    result->status = SolveStatus::kFailed;
+    result->message = "optimiser failed: " + summary.message;
+    return false;
+  }
+  if (summary.termination_type == ceres::NO_CONVERGENCE) result->flags |= kIterationLimit;
+  if (blocks[1].empty()) result->flags |= kPositionUnconstrained;
+  if (!accel_ready) result->flags |= kAccelerationUnavailable;
+
+  double* costs[5] = {&result->costs.orientation, &result->costs.position, &result->costs.acceleration,
+                      &result->costs.pca_projection, &result->costs.pca_deviation};
+  for (int t = 0; t < 5; ++t) {
+    for (ceres::ResidualBlockId id : blocks[t]) {
+      double cost = 0.0;
+      problem.EvaluateResidualBlock(id, /*apply_loss_function=*/true, &cost, nullptr, nullptr);
+      *costs[t] += 2.0 * cost;  // Ceres reports rho/2
+    }
+  }
+
+  return true;
+}
+
+SolveResult Solver::Solve(const FrameObservations& frame) {
+  const auto start = std::chrono::steady_clock::now();
+  SolveResult result;
+  result.timestamp = frame.timestamp;
+  auto finish = [&](SolveStatus status, std::string message) {
+    result.status = status;
+    result.message = std::move(message);
+    result.theta = theta_;
+    result.solve_time_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  };
+
+  if (!std::isfinite(frame.timestamp) ||
+      (!history_.empty() && frame.timestamp <= history_.back().timestamp)) {
+    return finish(SolveStatus::kRejectedFrame, "timestamp not finite or not after the previous frame");
+  }
+  const CleanFrame clean = Validate(frame, &result.counts);
+  int orientations = 0;
+  for (const auto& o : clean.imu_world) orientations += o.has_value();
+  if (clean.detections.empty() && orientations == 0) {
+    return finish(SolveStatus::kNoObservations, "no usable keypoint or IMU orientation");
+  }
+
+  const bool initialising = !initialised_;
+  Eigen::VectorXd x = theta_;
+  if (initialising) {
+    x = EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world).theta;
+  }
+
+  if (initialising) {
+    // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the
+    // Cauchy loss would treat their large errors as outliers.
+    SolveResult coarse = result;
+    if (!Optimise(clean, options_.max_initial_iterations, kCoarseLossBoost, &x, &coarse)) {
+      return finish(SolveStatus::kFailed, coarse.message);
+    }
+  }
+  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
+  if (!Optimise(clean, iterations, 1.0, &x, &result)) {
+    return finish(result.status, result.message);
+  }
+  theta_ = x;
+  initialised_ = true;
+  Remember(clean);
+  return finish(initialising ? SolveStatus::kInitialised : SolveStatus::kOk, "");
+}
+
+}  // namespace mocap

@@ -1,0 +1,232 @@
+#include "mocap/solver.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mocap/so3.h"
+#include "synthetic_scene.h"
+
+namespace mocap {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kMaxJointError = 1e-3;         // metres
+constexpr double kMaxBoneError = 0.1 * kDeg;    // radians
+
+SolverOptions ExactOptions() {
+  SolverOptions o;
+  o.max_iterations = 50;
+  o.function_tolerance = 1e-14;
+  o.gradient_tolerance = 1e-14;
+  o.parameter_tolerance = 1e-12;
+  return o;
+}
+
+std::unique_ptr<Solver> MakeSolver(const testing::Scene& scene, std::optional<PosePrior> prior,
+                                   SolverOptions options = ExactOptions()) {
+  std::string error;
+  auto solver = Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, prior, options, &error);
+  EXPECT_NE(solver, nullptr) << error;
+  return solver;
+}
+
+void ExpectFinite(const SolveResult& r) {
+  EXPECT_TRUE(r.theta.allFinite());
+  EXPECT_TRUE(std::isfinite(r.costs.position) && std::isfinite(r.costs.orientation));
+}
+
+// Three frames of smooth motion; frames 0 and 1 solved from the truth, frame 2 from a
+// start 10 degrees away with all five terms active (a noise-free prior, PriorThrough).
+TEST(Solver, RecoversRandomPosesFromTenDegreesAway) {
+  const testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd base = testing::RandomPose(scene.skeleton, &rng);
+    const Eigen::VectorXd velocity = 0.5 * (testing::RandomPose(scene.skeleton, &rng) - base);
+    const double dt = 1.0 / 60.0;
+    std::vector<Eigen::VectorXd> truth;
+    for (int f = 0; f < 3; ++f) truth.push_back(base + velocity * (f * dt) + 0.3 * velocity * (f * f * dt * dt));
+    auto solver = MakeSolver(scene, testing::PriorThrough(truth, 23, &rng));
+    std::vector<FrameObservations> frames;
+    for (int f = 0; f < 3; ++f) frames.push_back(testing::Render(scene, truth[f], f * dt));
+    testing::SetAccelerations(scene, truth[0], 0, truth[1], dt, truth[2], 2 * dt,
+                              solver->options().accel_at_rest, &frames[1]);
+    for (int f = 0; f < 2; ++f) {
+      solver->SetWarmStart(truth[f]);
+      solver->Solve(frames[f]);
+    }
+    solver->SetWarmStart(testing::Perturb(truth[2], 10 * kDeg, 0.05, &rng));
+    const SolveResult r = solver->Solve(frames[2]);
+    ASSERT_EQ(r.status, SolveStatus::kOk) << r.message;
+    EXPECT_EQ(r.counts.accelerations_used, 13);
+    EXPECT_EQ(r.counts.orientations_used, 13);
+    EXPECT_EQ(r.counts.keypoints_used + r.counts.keypoints_not_detected, 8 * 33);
+    EXPECT_FALSE(r.flags & kAccelerationUnavailable);
+    EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, truth[2]), kMaxJointError) << "trial " << trial;
+    EXPECT_LT(testing::MaxBoneAngleError(scene.skeleton, r.theta, truth[2]), kMaxBoneError) << "trial " << trial;
+  }
+}
+
+TEST(Solver, FirstFrameNeedsNoGroundTruth) {
+  const testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.4);
+    auto solver = MakeSolver(scene, testing::PriorThrough({truth}, 23, &rng));
+    const SolveResult r = solver->Solve(testing::Render(scene, truth, 0.0));
+    ASSERT_EQ(r.status, SolveStatus::kInitialised) << r.message;
+    EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, truth), kMaxJointError);
+    EXPECT_LT(testing::MaxBoneAngleError(scene.skeleton, r.theta, truth), kMaxBoneError);
+  }
+}
+
+TEST(Solver, FirstFrameFromVideoOnlyReachesThePose) {
+  const testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(6);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  auto solver = MakeSolver(scene, std::nullopt);
+  FrameObservations f = testing::Render(scene, truth, 0.0);
+  f.imus.clear();
+  const SolveResult r = solver->Solve(f);
+  ASSERT_EQ(r.status, SolveStatus::kInitialised) << r.message;
+  // Without IMUs or prior, what the cameras see is determined: every keypoint site.
+  EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), kMaxJointError);
+}
+
+// Video only, IMU only, and a camera dropping out mid-sequence all solve through the
+// same call.
+TEST(Solver, AnySubsetOfSensorsPerFrame) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(9);
+  const Eigen::VectorXd a = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const Eigen::VectorXd b = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  // The motion runs from a to b; the prior spans it, and pins what video alone cannot see.
+  auto solver = MakeSolver(scene, testing::PriorThrough({a, b}, 23, &rng));
+  double t = 0.0;
+  for (int f = 0; f < 30; ++f, t += 1.0 / 60.0) {
+    const double s = f / 29.0;
+    Eigen::VectorXd truth = a + s * (b - a);
+    FrameObservations obs = testing::Render(scene, truth, t);
+    if (f >= 10 && f < 15) obs.imus.clear();                          // video only
+    if (f >= 15 && f < 20) obs.cameras.erase(obs.cameras.begin() + 1);  // camera 1 drops out
+    if (f >= 20 && f < 23) obs.cameras.clear();                        // IMU only
+    const SolveResult r = solver->Solve(obs);
+    ExpectFinite(r);
+    ASSERT_TRUE(r.status == SolveStatus::kOk || r.status == SolveStatus::kInitialised) << r.message;
+    EXPECT_EQ(static_cast<bool>(r.flags & kPositionUnconstrained), f >= 20 && f < 23);
+    const double tolerance = (f >= 20 && f < 23) ? 0.05 : kMaxJointError;  // IMU-only: position held
+    EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), tolerance) << "frame " << f;
+  }
+}
+
+TEST(Solver, PriorPullsTowardsItsMeanWhenDataIsMissing) {
+  const testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(2);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const PosePrior prior = testing::RandomPrior(60, 23, truth, &rng);
+  auto solver = MakeSolver(scene, prior);
+  FrameObservations f = testing::Render(scene, truth, 0.0);
+  // Only the torso IMUs: limbs are constrained by the prior alone (which is centred on truth).
+  f.cameras.clear();
+  f.imus.resize(3);
+  solver->SetWarmStart(testing::Perturb(truth, 5 * kDeg, 0.0, &rng));
+  const SolveResult r = solver->Solve(f);
+  ASSERT_EQ(r.status, SolveStatus::kOk) << r.message;
+  EXPECT_LT(testing::MaxBoneAngleError(scene.skeleton, r.theta, truth), 0.5 * kDeg);
+  EXPECT_TRUE(r.flags & kPositionUnconstrained);
+}
+
+TEST(Solver, TermsCanBeSwitchedOffAndReportTheirCosts) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(4);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const PosePrior prior = testing::RandomPrior(60, 23, Eigen::VectorXd::Zero(66), &rng);
+  SolverOptions options = ExactOptions();
+  options.orientation.enabled = false;
+  auto solver = MakeSolver(scene, prior, options);
+  solver->SetWarmStart(truth);
+  const SolveResult r = solver->Solve(testing::Render(scene, truth, 0.0));
+  EXPECT_EQ(r.counts.orientations_used, 0);
+  EXPECT_EQ(r.costs.orientation, 0.0);
+  EXPECT_GT(r.costs.pca_projection, 0.0);  // the prior's mean is not the pose
+  EXPECT_GT(r.costs.pca_deviation, 0.0);
+  EXPECT_GT(r.costs.position, 0.0);        // so the data gives way a little
+}
+
+TEST(Solver, DegenerateInputGivesAStatusNeverANaN) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(8);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  auto solver = MakeSolver(scene, std::nullopt, SolverOptions());
+
+  FrameObservations empty;
+  SolveResult r = solver->Solve(empty);
+  EXPECT_EQ(r.status, SolveStatus::kNoObservations);
+  ExpectFinite(r);
+
+  FrameObservations f = testing::Render(scene, truth, 0.0);
+  for (ImuObservation& imu : f.imus) imu.has_acceleration = true;
+  f.cameras[0].keypoints[0].x = NAN;                 // NaN detection
+  f.cameras[0].keypoints[1].confidence = 0.0;        // zero confidence
+  f.cameras[0].keypoints[2].confidence = NAN;
+  f.cameras[1].keypoints[3].y = 1e9;                 // absurd pixel
+  f.imus[0].orientation.coeffs() *= 2.0;             // non-unit quaternion
+  f.imus[1].orientation.coeffs()(0) = NAN;
+  f.imus[2].acceleration.x() = INFINITY;
+  f.imus.push_back(f.imus[3]);                       // duplicate sensor
+  f.imus.back().imu = 3;
+  f.cameras.push_back(f.cameras[0]);
+  f.cameras.back().camera = 99;                      // unknown camera
+  r = solver->Solve(f);
+  ASSERT_EQ(r.status, SolveStatus::kInitialised) << r.message;
+  ExpectFinite(r);
+  EXPECT_EQ(r.counts.keypoints_invalid, 3);
+  EXPECT_GE(r.counts.keypoints_not_detected, 1);
+  EXPECT_EQ(r.counts.orientations_invalid, 2);
+  EXPECT_EQ(r.counts.accelerations_invalid, 3);  // one NaN, two without a usable orientation
+  EXPECT_EQ(r.counts.unknown_sources, 2);
+  EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), 0.01);
+
+  // Out-of-order and NaN timestamps are rejected, the pose held.
+  FrameObservations late = testing::Render(scene, truth, -1.0);
+  r = solver->Solve(late);
+  EXPECT_EQ(r.status, SolveStatus::kRejectedFrame);
+  late.timestamp = NAN;
+  EXPECT_EQ(solver->Solve(late).status, SolveStatus::kRejectedFrame);
+  ExpectFinite(r);
+}
+
+TEST(Solver, CameraBehindTheSubjectIsCountedAndSkipped) {
+  testing::Scene scene = testing::MakeScene(3);
+  std::mt19937 rng(12);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  FrameObservations f = testing::Render(scene, truth, 0.0);
+  // Turn camera 2 around: the subject is now behind it, but it still "reports" detections.
+  Camera& cam = scene.rig.cameras[2];
+  const Eigen::Vector3d center = cam.Center();
+  cam.rotation = Exp(Eigen::Vector3d(0, M_PI, 0)) * cam.rotation;
+  cam.translation = -cam.rotation * center;
+  auto solver = MakeSolver(scene, std::nullopt);
+  solver->SetWarmStart(truth);
+  const SolveResult r = solver->Solve(f);
+  ASSERT_EQ(r.status, SolveStatus::kOk) << r.message;
+  ExpectFinite(r);
+  EXPECT_EQ(r.counts.keypoints_behind_camera, 33);
+  EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), kMaxJointError);
+}
+
+TEST(Solver, RejectsInconsistentConfiguration) {
+  const testing::Scene scene = testing::MakeScene(2);
+  std::string error;
+  std::mt19937 rng(1);
+  PosePrior wrong = testing::RandomPrior(30, 5, Eigen::VectorXd::Zero(66), &rng);
+  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, wrong, SolverOptions(), &error), nullptr);
+  EXPECT_NE(error.find("DOF"), std::string::npos);
+  SolverOptions bad;
+  bad.position.weight = -1;
+  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, std::nullopt, bad, &error), nullptr);
+}
+
+}  // namespace
+}  // namespace mocap
