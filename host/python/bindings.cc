@@ -220,6 +220,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("pca_deviation", &SolverOptions::pca_deviation)
       .def_readwrite("accel_at_rest", &SolverOptions::accel_at_rest)
       .def_readwrite("min_confidence", &SolverOptions::min_confidence)
+      .def_readwrite("predict_motion", &SolverOptions::predict_motion)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations)
       .def_readwrite("max_initial_iterations", &SolverOptions::max_initial_iterations)
       .def_readwrite("function_tolerance", &SolverOptions::function_tolerance)

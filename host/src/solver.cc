@@ -128,6 +128,24 @@ void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
   if (theta.size() != skeleton_.pose_dim() || !theta.allFinite()) return;
   theta_ = theta;
   initialised_ = true;
+  warm_start_given_ = true;
+}
+
+Eigen::VectorXd Solver::WarmStart(double timestamp) const {
+  if (!options_.predict_motion || warm_start_given_ || history_.size() < 2) return theta_;
+  const SolvedFrame& a = history_[0];
+  const SolvedFrame& b = history_[1];
+  const double h1 = b.timestamp - a.timestamp, h2 = timestamp - b.timestamp;
+  if (!(h1 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap)) return theta_;
+  const double s = h2 / h1;
+  Eigen::VectorXd x = theta_;
+  x.head<3>() += s * (b.theta.head<3>() - a.theta.head<3>());
+  for (int b_idx = 0; b_idx < skeleton_.num_bones(); ++b_idx) {
+    const int i = Skeleton::RotationIndex(b_idx);
+    const Eigen::Matrix3d ra = Exp(a.theta.segment<3>(i)), rb = Exp(b.theta.segment<3>(i));
+    x.segment<3>(i) = Log(rb * Exp(s * Log(ra.transpose() * rb)));
+  }
+  return x;
 }
 
 Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts* counts) const {
@@ -191,13 +209,25 @@ Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts*
 void Solver::Remember(const CleanFrame& frame) {
   BodyPose pose;
   ForwardKinematics(skeleton_, theta_.data(), &pose);
-  SolvedFrame solved{frame.timestamp, {}};
+  SolvedFrame solved{frame.timestamp, theta_, {}};
   for (const ImuSite& s : imus_) {
     solved.imu_sites.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
   }
   if (history_.size() == 2) history_.erase(history_.begin());
   history_.push_back(std::move(solved));
   last_accel_ = frame.accel_world;
+}
+
+void Solver::UpdatePriorResiduals() {
+  if (!prior_) return;
+  if (prior_->rank() < prior_->dof() && options_.pca_projection.weight != pca_projection_weight_) {
+    pca_projection_ = std::make_unique<PcaProjectionResidual>(*prior_, options_.pca_projection.weight);
+    pca_projection_weight_ = options_.pca_projection.weight;
+  }
+  if (options_.pca_deviation.weight != pca_deviation_weight_) {
+    pca_deviation_ = std::make_unique<PcaDeviationResidual>(*prior_, options_.pca_deviation.weight);
+    pca_deviation_weight_ = options_.pca_deviation.weight;
+  }
 }
 
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
@@ -207,8 +237,19 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   KinematicsCache fk(&skeleton_);
   BodyPose start_pose;
   ForwardKinematics(skeleton_, x->data(), &start_pose);
+  // The problem borrows every cost and loss function: the per-frame ones are owned here,
+  // the prior terms (constant matrices) by the solver across frames.
+  std::vector<std::unique_ptr<ceres::CostFunction>> owned;
+  auto own = [&owned](ceres::CostFunction* f) { return owned.emplace_back(f).get(); };
+  const std::unique_ptr<ceres::LossFunction> orientation_loss(MakeLoss(options_.orientation));
+  const std::unique_ptr<ceres::LossFunction> position_loss(MakeLoss(position_term));
+  const std::unique_ptr<ceres::LossFunction> acceleration_loss(MakeLoss(options_.acceleration));
+  const std::unique_ptr<ceres::LossFunction> projection_loss(MakeLoss(options_.pca_projection));
+  const std::unique_ptr<ceres::LossFunction> deviation_loss(MakeLoss(options_.pca_deviation));
   ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.disable_all_safety_checks = true;
   ceres::Problem problem(problem_options);
   for (int b = 0; b < skeleton_.num_bones(); ++b) {
     problem.AddParameterBlock(x->data() + BlockOffset(b), BlockSize(b));
@@ -225,8 +266,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
         continue;
       }
       blocks[1].push_back(problem.AddResidualBlock(
-          new PositionResidual(&fk, &cam, site, d.pixel, d.confidence, options_.position.weight),
-          MakeLoss(position_term), ChainBlocks(skeleton_, site.bone, x->data())));
+          own(new PositionResidual(&fk, &cam, site, d.pixel, d.confidence, options_.position.weight)),
+          position_loss.get(), ChainBlocks(skeleton_, site.bone, x->data())));
     }
   }
   result->counts.keypoints_used = static_cast<int>(blocks[1].size());
@@ -239,14 +280,14 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (frame.imu_world[i] && Active(options_.orientation)) {
       blocks[0].push_back(problem.AddResidualBlock(
-          new OrientationResidual(&fk, imus_[i], *frame.imu_world[i], options_.orientation.weight),
-          MakeLoss(options_.orientation), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+          own(new OrientationResidual(&fk, imus_[i], *frame.imu_world[i], options_.orientation.weight)),
+          orientation_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
     }
     if (accel_ready && last_accel_[i] && Active(options_.acceleration)) {
       blocks[2].push_back(problem.AddResidualBlock(
-          new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i],
-                                   h1, h2, *last_accel_[i], options_.acceleration.weight),
-          MakeLoss(options_.acceleration), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+          own(new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i],
+                                   h1, h2, *last_accel_[i], options_.acceleration.weight)),
+          acceleration_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
     }
   }
   result->counts.orientations_used = static_cast<int>(blocks[0].size());
@@ -254,15 +295,11 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
 
   std::vector<double*> joint_blocks;
   for (int b = 1; b < skeleton_.num_bones(); ++b) joint_blocks.push_back(x->data() + BlockOffset(b));
-  if (prior_ && Active(options_.pca_projection) && prior_->rank() < prior_->dof()) {
-    blocks[3].push_back(problem.AddResidualBlock(
-        new PcaProjectionResidual(*prior_, options_.pca_projection.weight),
-        MakeLoss(options_.pca_projection), joint_blocks));
+  if (pca_projection_ && Active(options_.pca_projection)) {
+    blocks[3].push_back(problem.AddResidualBlock(pca_projection_.get(), projection_loss.get(), joint_blocks));
   }
-  if (prior_ && Active(options_.pca_deviation)) {
-    blocks[4].push_back(problem.AddResidualBlock(
-        new PcaDeviationResidual(*prior_, options_.pca_deviation.weight),
-        MakeLoss(options_.pca_deviation), joint_blocks));
+  if (pca_deviation_ && Active(options_.pca_deviation)) {
+    blocks[4].push_back(problem.AddResidualBlock(pca_deviation_.get(), deviation_loss.get(), joint_blocks));
   }
   if (blocks[0].empty() && blocks[1].empty()) {
     result->status = SolveStatus::kNoObservations;
@@ -271,8 +308,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   }
 
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  so.dense_linear_algebra_library_type = ceres::LAPACK;
   so.max_num_iterations = max_iterations;
   so.function_tolerance = options_.function_tolerance;
   so.gradient_tolerance = options_.gradient_tolerance;
@@ -329,8 +366,10 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     return finish(SolveStatus::kNoObservations, "no usable keypoint or IMU orientation");
   }
 
+  UpdatePriorResiduals();
   const bool initialising = !initialised_;
-  Eigen::VectorXd x = theta_;
+  Eigen::VectorXd x = WarmStart(frame.timestamp);
+  warm_start_given_ = false;
   if (initialising) {
     x = EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world).theta;
   }

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <ceres/cost_function.h>
+
 #include "mocap/camera.h"
 #include "mocap/kinematics.h"
 #include "mocap/observations.h"
@@ -43,7 +45,10 @@ struct SolverOptions {
   Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
   double min_confidence = 0.05;        // detections at or below are "not detected"
   double max_quaternion_error = 1e-3;  // | |q| - 1 | above this: the reading is rejected
-  double max_history_gap = 0.25;       // s: older solved frames do not feed E_A
+  double max_history_gap = 0.25;       // s: older solved frames do not feed E_A or prediction
+  // Warm start from a constant-velocity prediction of the two previous solutions (on
+  // SO(3) per joint) instead of the previous solution alone.
+  bool predict_motion = true;
   int max_iterations = 10;             // per warm-started frame
   int max_initial_iterations = 100;    // for the first frame
   // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
@@ -69,7 +74,7 @@ class Solver {
 
   // Forget the motion: the next frame is initialised again.
   void Reset();
-  // The next frame starts from theta (keeps the motion history).
+  // The next frame starts from theta exactly (keeps the motion history).
   void SetWarmStart(const Eigen::VectorXd& theta);
 
   const Eigen::VectorXd& pose() const { return theta_; }
@@ -84,6 +89,7 @@ class Solver {
  private:
   struct SolvedFrame {
     double timestamp;
+    Eigen::VectorXd theta;
     std::vector<Eigen::Vector3d> imu_sites;  // world positions of each IMU site
   };
   struct CleanFrame;
@@ -91,6 +97,10 @@ class Solver {
   Solver() = default;
   CleanFrame Validate(const FrameObservations& frame, InputCounts* counts) const;
   void Remember(const CleanFrame& frame);
+  // (Re)builds the prior terms' constant matrices when their weights changed.
+  void UpdatePriorResiduals();
+  // The warm start of a frame at `timestamp`.
+  Eigen::VectorXd WarmStart(double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in
   // *result) when nothing constrains the pose or the optimiser fails.
   bool Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
@@ -105,9 +115,12 @@ class Solver {
 
   Eigen::VectorXd theta_;
   bool initialised_ = false;
+  bool warm_start_given_ = false;  // SetWarmStart since the last solve: no prediction
   std::vector<SolvedFrame> history_;  // up to two previous solved frames, newest last
   // Measured world acceleration a(t1) of each IMU at the newest solved frame.
   std::vector<std::optional<Eigen::Vector3d>> last_accel_;
+  std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
+  double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
 };
 
 }  // namespace mocap
