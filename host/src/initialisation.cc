@@ -11,16 +11,17 @@
 namespace mocap {
 namespace {
 
-// A site moves rigidly with the torso when it lies on the pelvis or spine, or at the
-// origin of a bone hanging from them (hips, shoulders' roots, neck base).
+// A site moves (nearly) rigidly with the torso when it lies on the pelvis, the spine or
+// a clavicle, or at the origin of a bone hanging from them (hips, shoulders).
+bool IsTorsoBone(const Skeleton& skeleton, int b) {
+  const std::string& name = skeleton.bone(b).name;
+  return b == 0 || name.rfind("spine", 0) == 0 || name.rfind("clavicle", 0) == 0;
+}
+
 bool IsTorsoSite(const Skeleton& skeleton, const Site& site) {
-  auto is_torso_bone = [&](int b) { return b >= 0 && skeleton.Chain(b).size() <= 3 &&
-                                           skeleton.bone(b).name.rfind("spine", 0) == 0; };
-  const bool on_torso = site.bone == 0 || is_torso_bone(site.bone);
-  const bool at_root_of_child = site.offset.norm() < 1e-9 &&
-                                (skeleton.bone(site.bone).parent == 0 ||
-                                 is_torso_bone(skeleton.bone(site.bone).parent));
-  return on_torso || at_root_of_child;
+  if (IsTorsoBone(skeleton, site.bone)) return true;
+  const int parent = skeleton.bone(site.bone).parent;
+  return site.offset.norm() < 1e-9 && parent >= 0 && IsTorsoBone(skeleton, parent);
 }
 
 // Rotation R and translation t minimising sum |dst - (R src + t)|^2 (Kabsch).

@@ -94,6 +94,17 @@ TEST(Solver, FirstFrameFromVideoOnlyReachesThePose) {
   EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), kMaxJointError);
 }
 
+// One camera: the depth comes from the keypoints' spread against the skeleton's size.
+TEST(Solver, FirstFrameFromOneCameraAndImus) {
+  testing::Scene scene = testing::MakeScene(1);
+  std::mt19937 rng(10);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  auto solver = MakeSolver(scene, testing::PriorThrough({truth}, 23, &rng));
+  const SolveResult r = solver->Solve(testing::Render(scene, truth, 0.0));
+  ASSERT_EQ(r.status, SolveStatus::kInitialised) << r.message;
+  EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, truth), kMaxJointError);
+}
+
 // Video only, IMU only, and a camera dropping out mid-sequence all solve through the
 // same call.
 TEST(Solver, AnySubsetOfSensorsPerFrame) {

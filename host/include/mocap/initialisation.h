@@ -1,7 +1,8 @@
 // First-frame initialisation: a starting pose from one frame's observations, without
 // ground truth.
 //  - Root orientation: from an IMU on the root bone; else a rigid (Kabsch) fit of the
-//    rest-pose torso sites to triangulated torso keypoints; else facing the camera.
+//    rest-pose torso sites (hips, shoulders: sites on or hanging from the bones named
+//    pelvis/root, spine*, clavicle*) to their triangulated keypoints; else facing the camera.
 //  - Root position: from keypoints triangulated in two or more views; else, with one
 //    view, along the ray of the keypoints' centroid at the depth their spread implies;
 //    else unknown (the origin).
