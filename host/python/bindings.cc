@@ -234,6 +234,11 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("iterations", &SolveResult::iterations)
       .def_readonly("solve_time_ms", &SolveResult::solve_time_ms)
       .def_readonly("message", &SolveResult::message)
+      .def_property_readonly("timings_ms", [](const SolveResult& r) {
+        const SolveTimings& t = r.timings;
+        return py::dict(py::arg("ceres") = t.ceres, py::arg("linear_solver") = t.linear_solver,
+                        py::arg("jacobian_evaluation") = t.jacobian_evaluation,
+                        py::arg("residual_evaluation") = t.residual_evaluation); })
       .def_property_readonly("position_unconstrained", [](const SolveResult& r) { return bool(r.flags & kPositionUnconstrained); })
       .def_property_readonly("iteration_limit", [](const SolveResult& r) { return bool(r.flags & kIterationLimit); })
       .def_property_readonly("costs", [](const SolveResult& r) {

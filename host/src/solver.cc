@@ -319,6 +319,9 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   result->iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result->timings = {1e3 * summary.total_time_in_seconds, 1e3 * summary.linear_solver_time_in_seconds,
+                     1e3 * summary.jacobian_evaluation_time_in_seconds,
+                     1e3 * summary.residual_evaluation_time_in_seconds};
 
   if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() || !x->allFinite()) {
     result->status = SolveStatus::kFailed;

@@ -72,6 +72,14 @@ struct InputCounts {
   int unknown_sources = 0;          // camera or IMU index not in the rig / IMU set, or duplicate
 };
 
+// Where the time of one solve went, milliseconds (Ceres' own accounting inside).
+struct SolveTimings {
+  double ceres = 0;                // ceres::Solve, all of it
+  double linear_solver = 0;        // normal equations: J^T J and its Cholesky factorisation
+  double jacobian_evaluation = 0;  // residuals and Jacobians
+  double residual_evaluation = 0;  // residuals only (candidate steps)
+};
+
 struct SolveResult {
   SolveStatus status = SolveStatus::kNoObservations;
   Eigen::VectorXd theta;     // always finite
@@ -81,6 +89,7 @@ struct SolveResult {
   uint32_t flags = 0;
   int iterations = 0;
   double solve_time_ms = 0;  // wall time of Solve()
+  SolveTimings timings;      // of the final pass
   std::string message;       // human-readable reason when status is not kOk
 };
 

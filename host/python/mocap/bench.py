@@ -79,10 +79,10 @@ def _takes(skeleton, layout, imus, clips, noise: Noise, rng) -> list[Take]:
     return takes
 
 
-def _run(skeleton, layout, imus, pose_prior, takes: list[Take]) -> dict:
-    times_ms, iterations, joint_err, init_frames = [], [], [], 0
+def _run(skeleton, layout, imus, pose_prior, options, takes: list[Take]) -> dict:
+    times_ms, iterations, joint_err, init_frames, parts = [], [], [], 0, []
     for take in takes:
-        solve = _core.Solver(skeleton, take.rig, layout, imus, pose_prior)
+        solve = _core.Solver(skeleton, take.rig, layout, imus, pose_prior, options)
         cameras, sensors = list(range(len(take.rig.cameras))), list(range(len(imus)))
         for (t, kp, q, a), theta in zip(take.frames, take.thetas):
             r = solve.solve(t, cameras, kp, sensors, q, a)
@@ -90,6 +90,7 @@ def _run(skeleton, layout, imus, pose_prior, takes: list[Take]) -> dict:
                 init_frames += 1
                 continue
             times_ms.append(r.solve_time_ms)
+            parts.append(r.timings_ms)
             iterations.append(r.iterations)
             _, p_est = skeleton.forward_kinematics(r.theta)
             _, p_true = skeleton.forward_kinematics(theta)
@@ -98,11 +99,16 @@ def _run(skeleton, layout, imus, pose_prior, takes: list[Take]) -> dict:
     return {"frames": int(len(t)), "initial_frames": init_frames,
             "median_ms": round(float(np.median(t)), 4), "p99_ms": round(float(np.percentile(t, 99)), 4),
             "mean_ms": round(float(t.mean()), 4), "mean_iterations": round(float(np.mean(iterations)), 3),
-            "mean_joint_error_mm": round(1000 * float(np.mean(joint_err)), 2)}
+            "mean_joint_error_mm": round(1000 * float(np.mean(joint_err)), 2),
+            "median_parts_ms": {k: round(float(np.median([p[k] for p in parts])), 4) for k in parts[0]}}
 
 
-def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, noise: Noise = Noise()) -> dict:
+def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, function_tolerance: float | None = None,
+           noise: Noise = Noise()) -> dict:
     """The run with the lowest median of `repeats` (shared machines are noisy)."""
+    options = _core.SolverOptions()
+    if function_tolerance is not None:
+        options.function_tolerance = function_tolerance
     rng = np.random.default_rng(seed)
     core = pin_to_one_core()
     clips = [load_clip(c, rate) for c in BENCH_CLIPS]
@@ -115,10 +121,11 @@ def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, noise: Noise = N
         s.mount = rotations.exp(axis / np.linalg.norm(axis) * rng.uniform(0, noise.mount_max))
     pose_prior = _prior_from(PRIOR_GLOBS, rate)
     takes = _takes(skeleton, layout, imus, clips, noise, rng)
-    runs = [_run(skeleton, layout, imus, pose_prior, takes) for _ in range(repeats)]
+    runs = [_run(skeleton, layout, imus, pose_prior, options, takes) for _ in range(repeats)]
     best = min(runs, key=lambda r: r["median_ms"])
     return {"bench": "solver", "rate_hz": rate, "cameras": 8, "keypoints": len(layout), "imus": len(imus),
-            "terms": 5, "prior_rank": int(pose_prior.basis.shape[1]), **best,
+            "terms": 5, "prior_rank": int(pose_prior.basis.shape[1]),
+            "function_tolerance": options.function_tolerance, **best,
             "medians_ms_of_repeats": [r["median_ms"] for r in runs], "core": core}
 
 

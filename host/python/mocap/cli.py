@@ -15,7 +15,9 @@ def _bench(args: argparse.Namespace) -> int:
 
     if "solver" in args.only:
         try:
-            print(json.dumps(bench.solver(rate=args.rate, seed=args.seed)), flush=True)
+            result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats,
+                                  function_tolerance=args.function_tolerance)
+            print(json.dumps(result), flush=True)
         except DataMissingError as e:
             print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
     return 0
@@ -52,6 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--only", nargs="+", default=["solver"], choices=["solver"], help="benchmarks to run")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
+    b.add_argument("--function-tolerance", type=float, default=None,
+                   help="solver's relative cost change that ends a frame (default: the solver's)")
     b.set_defaults(func=_bench)
 
     s = sub.add_parser("skeleton", help="write a solver skeleton file from a BVH hierarchy")
