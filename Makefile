@@ -22,5 +22,6 @@ bench: build      ## benchmarks, one JSON object per line
 clean:
 	rm -rf build
 
-lint:             ## static checks of the Python code
+lint:             ## formatting of the C++ code, static checks of the Python code
+	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')
 	$(CURDIR)/.venv/bin/ruff check host/python

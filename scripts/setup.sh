@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 DEBIAN_PACKAGES=(
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config clang-format
   libceres-dev libeigen3-dev nlohmann-json3-dev pybind11-dev libgtest-dev
   python3 python3-dev python3-venv
 )

@@ -38,8 +38,10 @@ Skeleton SkeletonFromBones(const std::vector<std::string>& names, const std::vec
     throw std::invalid_argument("names, parents and offsets must have the same length");
   }
   std::vector<Skeleton::Bone> bones;
-  for (size_t b = 0; b < names.size(); ++b) bones.push_back({names[b], parents[b], offsets.row(b).transpose()});
-  return Checked<Skeleton>([&](Skeleton* s, std::string* e) { return Skeleton::Create(std::move(bones), s, e); });
+  for (size_t b = 0; b < names.size(); ++b)
+    bones.push_back({names[b], parents[b], offsets.row(b).transpose()});
+  return Checked<Skeleton>(
+      [&](Skeleton* s, std::string* e) { return Skeleton::Create(std::move(bones), s, e); });
 }
 
 py::tuple Fk(const Skeleton& s, const Eigen::VectorXd& theta) {
@@ -80,14 +82,16 @@ FrameObservations MakeFrame(double timestamp, const std::vector<int>& cameras, A
   FrameObservations f;
   f.timestamp = timestamp;
   if (!cameras.empty()) {
-    if (keypoints.ndim() != 3 || keypoints.shape(0) != static_cast<long>(cameras.size()) || keypoints.shape(2) != 3) {
+    if (keypoints.ndim() != 3 || keypoints.shape(0) != static_cast<long>(cameras.size()) ||
+        keypoints.shape(2) != 3) {
       throw std::invalid_argument("keypoints must be (cameras, keypoints, 3)");
     }
     auto k = keypoints.unchecked<3>();
     for (size_t c = 0; c < cameras.size(); ++c) {
       CameraObservation obs;
       obs.camera = cameras[c];
-      for (long i = 0; i < k.shape(1); ++i) obs.keypoints.push_back({k(c, i, 0), k(c, i, 1), k(c, i, 2)});
+      for (long i = 0; i < k.shape(1); ++i)
+        obs.keypoints.push_back({k(c, i, 0), k(c, i, 1), k(c, i, 2)});
       f.cameras.push_back(std::move(obs));
     }
   }
@@ -121,39 +125,70 @@ PYBIND11_MODULE(_core, m) {
   m.def("so3_log", &Log, "Rotation vector of a rotation matrix.");
 
   py::class_<Skeleton>(m, "Skeleton")
-      .def_static("load", [](const std::string& path) {
-        return Checked<Skeleton>([&](Skeleton* out, std::string* e) { return LoadSkeletonJson(path, out, e); }); })
-      .def_static("from_json", [](const std::string& text) {
-        return Checked<Skeleton>([&](Skeleton* out, std::string* e) { return ParseSkeletonJson(text, out, e); }); })
-      .def_static("from_bones", &SkeletonFromBones, py::arg("names"), py::arg("parents"), py::arg("offsets"))
+      .def_static("load",
+                  [](const std::string& path) {
+                    return Checked<Skeleton>([&](Skeleton* out, std::string* e) {
+                      return LoadSkeletonJson(path, out, e);
+                    });
+                  })
+      .def_static("from_json",
+                  [](const std::string& text) {
+                    return Checked<Skeleton>([&](Skeleton* out, std::string* e) {
+                      return ParseSkeletonJson(text, out, e);
+                    });
+                  })
+      .def_static("from_bones", &SkeletonFromBones, py::arg("names"), py::arg("parents"),
+                  py::arg("offsets"))
       .def("to_json", &SkeletonToJson)
       .def_property_readonly("num_bones", &Skeleton::num_bones)
       .def_property_readonly("pose_dim", &Skeleton::pose_dim)
-      .def_property_readonly("bone_names", [](const Skeleton& s) {
-        std::vector<std::string> n; for (const auto& b : s.bones()) n.push_back(b.name); return n; })
-      .def_property_readonly("parents", [](const Skeleton& s) {
-        std::vector<int> p; for (const auto& b : s.bones()) p.push_back(b.parent); return p; })
-      .def_property_readonly("offsets", [](const Skeleton& s) {
-        Eigen::MatrixX3d o(s.num_bones(), 3);
-        for (int b = 0; b < s.num_bones(); ++b) o.row(b) = s.bone(b).offset.transpose();
-        return o; })
+      .def_property_readonly("bone_names",
+                             [](const Skeleton& s) {
+                               std::vector<std::string> n;
+                               for (const auto& b : s.bones()) n.push_back(b.name);
+                               return n;
+                             })
+      .def_property_readonly("parents",
+                             [](const Skeleton& s) {
+                               std::vector<int> p;
+                               for (const auto& b : s.bones()) p.push_back(b.parent);
+                               return p;
+                             })
+      .def_property_readonly("offsets",
+                             [](const Skeleton& s) {
+                               Eigen::MatrixX3d o(s.num_bones(), 3);
+                               for (int b = 0; b < s.num_bones(); ++b)
+                                 o.row(b) = s.bone(b).offset.transpose();
+                               return o;
+                             })
       .def("bone_index", &Skeleton::BoneIndex)
       .def("rest_height", &Skeleton::RestHeight)
       .def("forward_kinematics", &Fk, py::arg("theta"),
            "(rotations (n, 3, 3) bone->world, positions (n, 3) of bone origins, metres)");
 
   py::class_<KeypointLayout>(m, "KeypointLayout")
-      .def_static("load", [](const std::string& path, const Skeleton& s) {
-        return Checked<KeypointLayout>([&](KeypointLayout* out, std::string* e) { return LoadKeypointLayoutJson(path, s, out, e); }); })
+      .def_static("load",
+                  [](const std::string& path, const Skeleton& s) {
+                    return Checked<KeypointLayout>([&](KeypointLayout* out, std::string* e) {
+                      return LoadKeypointLayoutJson(path, s, out, e);
+                    });
+                  })
       .def("scaled_to", &KeypointLayout::ScaledTo)
       .def_readonly("name", &KeypointLayout::name)
       .def_readonly("names", &KeypointLayout::names)
-      .def_property_readonly("bones", [](const KeypointLayout& l) {
-        std::vector<int> b; for (const auto& s : l.sites) b.push_back(s.bone); return b; })
-      .def_property_readonly("offsets", [](const KeypointLayout& l) {
-        Eigen::MatrixX3d o(l.size(), 3);
-        for (int k = 0; k < l.size(); ++k) o.row(k) = l.sites[k].offset.transpose();
-        return o; })
+      .def_property_readonly("bones",
+                             [](const KeypointLayout& l) {
+                               std::vector<int> b;
+                               for (const auto& s : l.sites) b.push_back(s.bone);
+                               return b;
+                             })
+      .def_property_readonly("offsets",
+                             [](const KeypointLayout& l) {
+                               Eigen::MatrixX3d o(l.size(), 3);
+                               for (int k = 0; k < l.size(); ++k)
+                                 o.row(k) = l.sites[k].offset.transpose();
+                               return o;
+                             })
       .def("__len__", &KeypointLayout::size);
 
   py::class_<ImuSite>(m, "ImuSite")
@@ -164,15 +199,20 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("offset", &ImuSite::offset, "bone frame, metres")
       .def_readwrite("reference", &ImuSite::reference, "IMU reference frame -> world rotation");
   m.def("load_imu_sites", [](const std::string& path, const Skeleton& s) {
-        return Checked<std::vector<ImuSite>>([&](std::vector<ImuSite>* out, std::string* e) { return LoadImuSitesJson(path, s, out, e); }); });
+    return Checked<std::vector<ImuSite>>([&](std::vector<ImuSite>* out, std::string* e) {
+      return LoadImuSitesJson(path, s, out, e);
+    });
+  });
 
   py::class_<Camera>(m, "Camera")
       .def(py::init<>())
       .def_readwrite("name", &Camera::name)
       .def_readwrite("width", &Camera::width)
       .def_readwrite("height", &Camera::height)
-      .def_readwrite("fx", &Camera::fx).def_readwrite("fy", &Camera::fy)
-      .def_readwrite("cx", &Camera::cx).def_readwrite("cy", &Camera::cy)
+      .def_readwrite("fx", &Camera::fx)
+      .def_readwrite("fy", &Camera::fy)
+      .def_readwrite("cx", &Camera::cx)
+      .def_readwrite("cy", &Camera::cy)
       .def_readwrite("distortion", &Camera::distortion, "k1, k2, p1, p2, k3")
       .def_readwrite("rotation", &Camera::rotation, "world -> camera")
       .def_readwrite("translation", &Camera::translation, "world -> camera, metres")
@@ -181,11 +221,21 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<Rig>(m, "Rig")
       .def(py::init<>())
-      .def(py::init([](std::vector<Camera> c) { Rig r; r.cameras = std::move(c); return r; }))
-      .def_static("load", [](const std::string& path) {
-        return Checked<Rig>([&](Rig* out, std::string* e) { return LoadRigJson(path, out, e); }); })
-      .def_static("from_json", [](const std::string& text) {
-        return Checked<Rig>([&](Rig* out, std::string* e) { return ParseRigJson(text, out, e); }); })
+      .def(py::init([](std::vector<Camera> c) {
+        Rig r;
+        r.cameras = std::move(c);
+        return r;
+      }))
+      .def_static("load",
+                  [](const std::string& path) {
+                    return Checked<Rig>(
+                        [&](Rig* out, std::string* e) { return LoadRigJson(path, out, e); });
+                  })
+      .def_static("from_json",
+                  [](const std::string& text) {
+                    return Checked<Rig>(
+                        [&](Rig* out, std::string* e) { return ParseRigJson(text, out, e); });
+                  })
       .def("to_json", &RigToJson)
       .def_readwrite("cameras", &Rig::cameras);
 
@@ -195,16 +245,23 @@ PYBIND11_MODULE(_core, m) {
                *p = PosePrior{std::move(mean), std::move(basis), std::move(sigma)};
                return p->IsValid(e);
              });
-           }), py::arg("mean"), py::arg("basis"), py::arg("sigma"))
-      .def_static("load", [](const std::string& path) {
-        return Checked<PosePrior>([&](PosePrior* out, std::string* e) { return LoadPosePriorJson(path, out, e); }); })
+           }),
+           py::arg("mean"), py::arg("basis"), py::arg("sigma"))
+      .def_static("load",
+                  [](const std::string& path) {
+                    return Checked<PosePrior>([&](PosePrior* out, std::string* e) {
+                      return LoadPosePriorJson(path, out, e);
+                    });
+                  })
       .def("to_json", &PosePriorToJson)
       .def_readonly("mean", &PosePrior::mean)
       .def_readonly("basis", &PosePrior::basis)
       .def_readonly("sigma", &PosePrior::sigma);
 
   py::enum_<LossType>(m, "LossType")
-      .value("TRIVIAL", LossType::kTrivial).value("CAUCHY", LossType::kCauchy).value("HUBER", LossType::kHuber);
+      .value("TRIVIAL", LossType::kTrivial)
+      .value("CAUCHY", LossType::kCauchy)
+      .value("HUBER", LossType::kHuber);
   py::class_<TermOptions>(m, "TermOptions")
       .def(py::init<>())
       .def_readwrite("enabled", &TermOptions::enabled)
@@ -228,24 +285,35 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("gradient_tolerance", &SolverOptions::gradient_tolerance);
 
   py::class_<SolveResult>(m, "SolveResult")
-      .def_property_readonly("status", [](const SolveResult& r) { return std::string(ToString(r.status)); })
+      .def_property_readonly("status",
+                             [](const SolveResult& r) { return std::string(ToString(r.status)); })
       .def_readonly("theta", &SolveResult::theta)
       .def_readonly("timestamp", &SolveResult::timestamp)
       .def_readonly("iterations", &SolveResult::iterations)
       .def_readonly("solve_time_ms", &SolveResult::solve_time_ms)
       .def_readonly("message", &SolveResult::message)
-      .def_property_readonly("timings_ms", [](const SolveResult& r) {
-        const SolveTimings& t = r.timings;
-        return py::dict(py::arg("ceres") = t.ceres, py::arg("linear_solver") = t.linear_solver,
-                        py::arg("jacobian_evaluation") = t.jacobian_evaluation,
-                        py::arg("residual_evaluation") = t.residual_evaluation); })
-      .def_property_readonly("position_unconstrained", [](const SolveResult& r) { return bool(r.flags & kPositionUnconstrained); })
-      .def_property_readonly("iteration_limit", [](const SolveResult& r) { return bool(r.flags & kIterationLimit); })
-      .def_property_readonly("costs", [](const SolveResult& r) {
-        const TermCosts& c = r.costs;
-        return py::dict(py::arg("orientation") = c.orientation, py::arg("position") = c.position,
-                        py::arg("acceleration") = c.acceleration, py::arg("pca_projection") = c.pca_projection,
-                        py::arg("pca_deviation") = c.pca_deviation); })
+      .def_property_readonly(
+          "timings_ms",
+          [](const SolveResult& r) {
+            const SolveTimings& t = r.timings;
+            return py::dict(py::arg("ceres") = t.ceres, py::arg("linear_solver") = t.linear_solver,
+                            py::arg("jacobian_evaluation") = t.jacobian_evaluation,
+                            py::arg("residual_evaluation") = t.residual_evaluation);
+          })
+      .def_property_readonly(
+          "position_unconstrained",
+          [](const SolveResult& r) { return bool(r.flags & kPositionUnconstrained); })
+      .def_property_readonly("iteration_limit",
+                             [](const SolveResult& r) { return bool(r.flags & kIterationLimit); })
+      .def_property_readonly("costs",
+                             [](const SolveResult& r) {
+                               const TermCosts& c = r.costs;
+                               return py::dict(py::arg("orientation") = c.orientation,
+                                               py::arg("position") = c.position,
+                                               py::arg("acceleration") = c.acceleration,
+                                               py::arg("pca_projection") = c.pca_projection,
+                                               py::arg("pca_deviation") = c.pca_deviation);
+                             })
       .def_property_readonly("counts", [](const SolveResult& r) {
         const InputCounts& c = r.counts;
         return py::dict(py::arg("keypoints_used") = c.keypoints_used,
@@ -256,27 +324,34 @@ PYBIND11_MODULE(_core, m) {
                         py::arg("orientations_invalid") = c.orientations_invalid,
                         py::arg("accelerations_used") = c.accelerations_used,
                         py::arg("accelerations_invalid") = c.accelerations_invalid,
-                        py::arg("unknown_sources") = c.unknown_sources); });
+                        py::arg("unknown_sources") = c.unknown_sources);
+      });
 
   py::class_<Solver>(m, "Solver")
       .def(py::init([](Skeleton s, Rig r, KeypointLayout l, std::vector<ImuSite> i,
                        std::optional<PosePrior> p, SolverOptions o) {
              std::string e;
-             auto solver = Solver::Create(std::move(s), std::move(r), std::move(l), std::move(i), std::move(p), o, &e);
+             auto solver = Solver::Create(std::move(s), std::move(r), std::move(l), std::move(i),
+                                          std::move(p), o, &e);
              if (!solver) throw std::invalid_argument(e);
              return solver;
-           }), py::arg("skeleton"), py::arg("rig"), py::arg("layout"), py::arg("imus"),
+           }),
+           py::arg("skeleton"), py::arg("rig"), py::arg("layout"), py::arg("imus"),
            py::arg("prior") = py::none(), py::arg("options") = SolverOptions())
-      .def("solve", [](Solver& s, double t, const std::vector<int>& cameras, Array keypoints,
-                       const std::vector<int>& imus, Array quaternions, Array accelerations) {
-             const FrameObservations f = MakeFrame(t, cameras, keypoints, imus, quaternions, accelerations);
-             py::gil_scoped_release release;
-             return s.Solve(f);
-           }, py::arg("timestamp"), py::arg("cameras"), py::arg("keypoints"), py::arg("imus"),
-           py::arg("quaternions_wxyz"), py::arg("accelerations"),
-           "Solve one frame. keypoints (C, K, 3) pixels+confidence for the listed cameras; "
-           "quaternions (M, 4) sensor->IMU reference, w first; accelerations (M, 3) m/s^2 in the "
-           "sensor frame with gravity. NaN marks a missing reading.")
+      .def(
+          "solve",
+          [](Solver& s, double t, const std::vector<int>& cameras, Array keypoints,
+             const std::vector<int>& imus, Array quaternions, Array accelerations) {
+            const FrameObservations f =
+                MakeFrame(t, cameras, keypoints, imus, quaternions, accelerations);
+            py::gil_scoped_release release;
+            return s.Solve(f);
+          },
+          py::arg("timestamp"), py::arg("cameras"), py::arg("keypoints"), py::arg("imus"),
+          py::arg("quaternions_wxyz"), py::arg("accelerations"),
+          "Solve one frame. keypoints (C, K, 3) pixels+confidence for the listed cameras; "
+          "quaternions (M, 4) sensor->IMU reference, w first; accelerations (M, 3) m/s^2 in the "
+          "sensor frame with gravity. NaN marks a missing reading.")
       .def("reset", &Solver::Reset)
       .def("set_warm_start", &Solver::SetWarmStart)
       .def_property_readonly("pose", &Solver::pose)

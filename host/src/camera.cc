@@ -88,13 +88,15 @@ bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
       return false;
     }
     c.name = jc.value("name", "cam" + std::to_string(rig.cameras.size()));
-    const bool ok = jc.contains("width") && jc.contains("height") && jc["width"].is_number_integer() &&
-                    jc["height"].is_number_integer() && jc.contains("fx") && jc.contains("fy") &&
-                    jc.contains("cx") && jc.contains("cy") && jc["fx"].is_number() &&
-                    jc["fy"].is_number() && jc["cx"].is_number() && jc["cy"].is_number() &&
-                    jc.contains("rotation") && internal::ReadVector3(jc["rotation"], &rotvec) &&
-                    jc.contains("translation") && internal::ReadVector3(jc["translation"], &c.translation) &&
-                    (!jc.contains("distortion") || internal::ReadVector(jc["distortion"], 5, c.distortion.data()));
+    const bool ok = jc.contains("width") && jc.contains("height") &&
+                    jc["width"].is_number_integer() && jc["height"].is_number_integer() &&
+                    jc.contains("fx") && jc.contains("fy") && jc.contains("cx") &&
+                    jc.contains("cy") && jc["fx"].is_number() && jc["fy"].is_number() &&
+                    jc["cx"].is_number() && jc["cy"].is_number() && jc.contains("rotation") &&
+                    internal::ReadVector3(jc["rotation"], &rotvec) && jc.contains("translation") &&
+                    internal::ReadVector3(jc["translation"], &c.translation) &&
+                    (!jc.contains("distortion") ||
+                     internal::ReadVector(jc["distortion"], 5, c.distortion.data()));
     if (!ok) {
       *error = "camera '" + c.name + "': missing or malformed field";
       return false;
@@ -114,13 +116,8 @@ bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
 }
 
 bool LoadRigJson(const std::string& path, Rig* out, std::string* error) {
-  std::string text;
-  if (!internal::ReadTextFile(path, &text, error)) return false;
-  if (!ParseRigJson(text, out, error)) {
-    *error = path + ": " + *error;
-    return false;
-  }
-  return true;
+  return internal::LoadFile(
+      path, error, [&](const std::string& text) { return ParseRigJson(text, out, error); });
 }
 
 std::string RigToJson(const Rig& rig) {
@@ -129,11 +126,17 @@ std::string RigToJson(const Rig& rig) {
   j["cameras"] = nlohmann::json::array();
   for (const Camera& c : rig.cameras) {
     const Eigen::Vector3d r = Log(c.rotation);
-    j["cameras"].push_back({{"name", c.name}, {"width", c.width}, {"height", c.height},
-                            {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                            {"distortion", c.distortion},
-                            {"rotation", {r.x(), r.y(), r.z()}},
-                            {"translation", {c.translation.x(), c.translation.y(), c.translation.z()}}});
+    j["cameras"].push_back(
+        {{"name", c.name},
+         {"width", c.width},
+         {"height", c.height},
+         {"fx", c.fx},
+         {"fy", c.fy},
+         {"cx", c.cx},
+         {"cy", c.cy},
+         {"distortion", c.distortion},
+         {"rotation", {r.x(), r.y(), r.z()}},
+         {"translation", {c.translation.x(), c.translation.y(), c.translation.z()}}});
   }
   return j.dump(2);
 }

@@ -41,7 +41,8 @@ TEST(Camera, ProjectsHandComputedPoint) {
 TEST(Camera, RefusesPointsBehind) {
   const Camera c = TestCamera();
   Eigen::Vector2d px(-1, -1);
-  const Eigen::Vector3d behind = c.rotation.transpose() * (Eigen::Vector3d(0, 0, -1) - c.translation);
+  const Eigen::Vector3d behind =
+      c.rotation.transpose() * (Eigen::Vector3d(0, 0, -1) - c.translation);
   EXPECT_FALSE(c.Project(behind, &px));
   EXPECT_EQ(px.x(), -1);
 }

@@ -30,9 +30,11 @@ TEST(DataFiles, LayoutsHaveTheirDetectorsKeypointCounts) {
   Skeleton s;
   std::string error;
   ASSERT_TRUE(LoadSkeletonJson(DataPath("skeleton_default.json"), &s, &error));
-  for (const auto& [name, count] : {std::pair<std::string, int>{"coco17", 17}, {"body25b", 25}, {"blazepose33", 33}}) {
+  for (const auto& [name, count] :
+       {std::pair<std::string, int>{"coco17", 17}, {"body25b", 25}, {"blazepose33", 33}}) {
     KeypointLayout layout;
-    ASSERT_TRUE(LoadKeypointLayoutJson(DataPath("layouts/" + name + ".json"), s, &layout, &error)) << error;
+    ASSERT_TRUE(LoadKeypointLayoutJson(DataPath("layouts/" + name + ".json"), s, &layout, &error))
+        << error;
     EXPECT_EQ(layout.size(), count) << name;
     EXPECT_EQ(layout.name, name);
   }
@@ -51,7 +53,8 @@ TEST(DataFiles, LayoutOffsetsScaleWithTheSubject) {
   ASSERT_TRUE(Skeleton::Create(bones, &tall, &error));
   KeypointLayout layout;
   ASSERT_TRUE(LoadKeypointLayoutJson(DataPath("layouts/coco17.json"), s, &layout, &error));
-  EXPECT_NEAR(layout.ScaledTo(tall).sites[0].offset.norm(), 1.2 * layout.sites[0].offset.norm(), 1e-9);
+  EXPECT_NEAR(layout.ScaledTo(tall).sites[0].offset.norm(), 1.2 * layout.sites[0].offset.norm(),
+              1e-9);
 }
 
 TEST(DataFiles, ImuSetsAreThePapersSets) {
@@ -70,17 +73,25 @@ TEST(DataFiles, MalformedFilesAreRefusedWithAReason) {
   std::string error;
   EXPECT_FALSE(ParseSkeletonJson("{not json", &s, &error));
   EXPECT_EQ(error, "invalid JSON");
-  EXPECT_FALSE(ParseSkeletonJson(R"({"format": "mocap.skeleton/1", "bones": [{"name": "a", "parent": "zz", "offset": [0,0,0]}]})", &s, &error));
+  EXPECT_FALSE(ParseSkeletonJson(
+      R"({"format": "mocap.skeleton/1", "bones": [{"name": "a", "parent": "zz", "offset": [0,0,0]}]})",
+      &s, &error));
   EXPECT_NE(error.find("zz"), std::string::npos);
   EXPECT_FALSE(LoadSkeletonJson("/nonexistent.json", &s, &error));
   ASSERT_TRUE(LoadSkeletonJson(DataPath("skeleton_default.json"), &s, &error));
   KeypointLayout layout;
-  EXPECT_FALSE(ParseKeypointLayoutJson(R"({"format": "mocap.layout/1", "keypoints": [{"name": "x", "bone": "tail"}]})", s, &layout, &error));
+  EXPECT_FALSE(ParseKeypointLayoutJson(
+      R"({"format": "mocap.layout/1", "keypoints": [{"name": "x", "bone": "tail"}]})", s, &layout,
+      &error));
   EXPECT_NE(error.find("tail"), std::string::npos);
   Rig rig;
-  EXPECT_FALSE(ParseRigJson(R"({"format": "mocap.rig/1", "cameras": [{"name": "c", "width": 10, "height": 10, "fx": -1, "fy": 1, "cx": 0, "cy": 0, "rotation": [0,0,0], "translation": [0,0,0]}]})", &rig, &error));
+  EXPECT_FALSE(ParseRigJson(
+      R"({"format": "mocap.rig/1", "cameras": [{"name": "c", "width": 10, "height": 10, "fx": -1, "fy": 1, "cx": 0, "cy": 0, "rotation": [0,0,0], "translation": [0,0,0]}]})",
+      &rig, &error));
   PosePrior prior;
-  EXPECT_FALSE(ParsePosePriorJson(R"({"format": "mocap.prior/1", "dof": 2, "mean": [0, 0], "basis": [[1, 1]], "sigma": [1]})", &prior, &error));
+  EXPECT_FALSE(ParsePosePriorJson(
+      R"({"format": "mocap.prior/1", "dof": 2, "mean": [0, 0], "basis": [[1, 1]], "sigma": [1]})",
+      &prior, &error));
   EXPECT_NE(error.find("orthonormal"), std::string::npos);
 }
 

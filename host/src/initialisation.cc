@@ -1,9 +1,8 @@
 #include "mocap/initialisation.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <map>
-
-#include <Eigen/SVD>
 
 #include "mocap/kinematics.h"
 #include "mocap/so3.h"
@@ -162,7 +161,8 @@ InitialPose EstimateInitialPose(const Skeleton& skeleton, const Rig& rig,
       centroid /= dets.size();
       rest_centroid /= dets.size();
       const Eigen::Vector3d at =
-          cam.Center() + depth * cam.rotation.transpose() * Eigen::Vector3d(centroid.x(), centroid.y(), 1.0);
+          cam.Center() +
+          depth * cam.rotation.transpose() * Eigen::Vector3d(centroid.x(), centroid.y(), 1.0);
       if (!root_known) root = FacingCamera(cam, at);
       out.theta.head<3>() = at - root * rest_centroid - offset0 + root * offset0;
       out.position_known = true;

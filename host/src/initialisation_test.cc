@@ -1,8 +1,8 @@
 #include "mocap/initialisation.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "mocap/so3.h"
 #include "synthetic_scene.h"
@@ -24,15 +24,18 @@ std::vector<Detection> Detections(const testing::Scene& scene, const FrameObserv
   std::vector<Detection> out;
   for (const CameraObservation& c : f.cameras) {
     for (int k = 0; k < static_cast<int>(c.keypoints.size()); ++k) {
-      if (c.keypoints[k].confidence > 0) out.push_back({c.camera, k, {c.keypoints[k].x, c.keypoints[k].y}, 1.0});
+      if (c.keypoints[k].confidence > 0)
+        out.push_back({c.camera, k, {c.keypoints[k].x, c.keypoints[k].y}, 1.0});
     }
   }
   return out;
 }
 
-std::vector<std::optional<Eigen::Matrix3d>> ImuWorld(const testing::Scene& scene, const FrameObservations& f) {
+std::vector<std::optional<Eigen::Matrix3d>> ImuWorld(const testing::Scene& scene,
+                                                     const FrameObservations& f) {
   std::vector<std::optional<Eigen::Matrix3d>> out(scene.imus.size());
-  for (const ImuObservation& o : f.imus) out[o.imu] = scene.imus[o.imu].reference * o.orientation.toRotationMatrix();
+  for (const ImuObservation& o : f.imus)
+    out[o.imu] = scene.imus[o.imu].reference * o.orientation.toRotationMatrix();
   return out;
 }
 
@@ -57,8 +60,9 @@ TEST(Initialisation, RootFromTriangulatedTorsoWithoutImus) {
   std::mt19937 rng(3);
   const Eigen::VectorXd truth = RigidTorsoPose(scene.skeleton, &rng);
   const FrameObservations f = testing::Render(scene, truth, 0.0);
-  const InitialPose init = EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus,
-                                               Detections(scene, f), std::vector<std::optional<Eigen::Matrix3d>>(13));
+  const InitialPose init =
+      EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus, Detections(scene, f),
+                          std::vector<std::optional<Eigen::Matrix3d>>(13));
   ASSERT_TRUE(init.position_known);
   EXPECT_LT((init.theta.head<3>() - truth.head<3>()).norm(), 1e-6);
   EXPECT_LT(AngleBetween(Exp(init.theta.segment<3>(3)), Exp(truth.segment<3>(3))), 1e-6);
@@ -70,8 +74,9 @@ TEST(Initialisation, DepthFromOneView) {
   Eigen::VectorXd truth = RigidTorsoPose(scene.skeleton, &rng);
   truth.segment(6, 60) *= 0.2;  // nearly the rest pose: the spread is the rest pose's
   const FrameObservations f = testing::Render(scene, truth, 0.0);
-  const InitialPose init = EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus,
-                                               Detections(scene, f), std::vector<std::optional<Eigen::Matrix3d>>(13));
+  const InitialPose init =
+      EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus, Detections(scene, f),
+                          std::vector<std::optional<Eigen::Matrix3d>>(13));
   ASSERT_TRUE(init.position_known);
   const Camera& cam = scene.rig.cameras[0];
   const double true_depth = (cam.rotation * truth.head<3>() + cam.translation).z();
@@ -84,7 +89,8 @@ TEST(Initialisation, BoneOrientationsFromImusAlone) {
   std::mt19937 rng(5);
   const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng);
   const FrameObservations f = testing::Render(scene, truth, 0.0);
-  const InitialPose init = EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus, {}, ImuWorld(scene, f));
+  const InitialPose init = EstimateInitialPose(scene.skeleton, scene.rig, scene.layout, scene.imus,
+                                               {}, ImuWorld(scene, f));
   EXPECT_FALSE(init.position_known);
   BodyPose a, b;
   ForwardKinematics(scene.skeleton, init.theta.data(), &a);

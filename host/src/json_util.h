@@ -2,12 +2,11 @@
 #ifndef MOCAP_SRC_JSON_UTIL_H_
 #define MOCAP_SRC_JSON_UTIL_H_
 
+#include <Eigen/Core>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 namespace mocap {
 namespace internal {
@@ -21,6 +20,18 @@ inline bool ReadTextFile(const std::string& path, std::string* text, std::string
   std::stringstream ss;
   ss << in.rdbuf();
   *text = ss.str();
+  return true;
+}
+
+// Reads path and hands its text to parse(text); a failure's *error is prefixed with the path.
+template <typename Parse>
+bool LoadFile(const std::string& path, std::string* error, Parse parse) {
+  std::string text;
+  if (!ReadTextFile(path, &text, error)) return false;
+  if (!parse(text)) {
+    *error = path + ": " + *error;
+    return false;
+  }
   return true;
 }
 

@@ -33,7 +33,8 @@ void Resize(int n, BodyPose* pose) {
 
 void ForwardKinematics(const Skeleton& skeleton, const double* theta, BodyPose* out) {
   Resize(skeleton.num_bones(), out);
-  for (int b = 0; b < skeleton.num_bones(); ++b) ComputeBone(skeleton, b, theta + BlockOffset(b), out);
+  for (int b = 0; b < skeleton.num_bones(); ++b)
+    ComputeBone(skeleton, b, theta + BlockOffset(b), out);
 }
 
 std::vector<double*> ChainBlocks(const Skeleton& skeleton, int b, double* theta) {

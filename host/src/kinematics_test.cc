@@ -1,8 +1,8 @@
 #include "mocap/kinematics.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "mocap/so3.h"
 #include "synthetic_scene.h"
@@ -16,8 +16,8 @@ constexpr double kTol = 1e-12;
 Skeleton ThreeBones() {
   Skeleton s;
   std::string error;
-  EXPECT_TRUE(Skeleton::Create({{"pelvis", -1, {0, 0, 0}}, {"spine", 0, {0, 0, 0.5}}, {"arm", 1, {0, 0.4, 0}}},
-                               &s, &error))
+  EXPECT_TRUE(Skeleton::Create(
+      {{"pelvis", -1, {0, 0, 0}}, {"spine", 0, {0, 0, 0.5}}, {"arm", 1, {0, 0.4, 0}}}, &s, &error))
       << error;
   return s;
 }
@@ -50,7 +50,8 @@ TEST(ForwardKinematics, HandComputedPose) {
   expected << 0, 0, 1, 1, 0, 0, 0, 1, 0;
   EXPECT_LT((pose.rotation[2] - expected).norm(), 1e-12);
   // A point 0.1 along the arm's own y axis sits at +z in world after the bend.
-  EXPECT_LT((pose.rotation[2] * Eigen::Vector3d(0, 0.1, 0) - Eigen::Vector3d(0, 0, 0.1)).norm(), 1e-12);
+  EXPECT_LT((pose.rotation[2] * Eigen::Vector3d(0, 0.1, 0) - Eigen::Vector3d(0, 0, 0.1)).norm(),
+            1e-12);
 }
 
 TEST(ForwardKinematics, PointAndRotationJacobiansMatchFiniteDifferences) {
@@ -111,14 +112,18 @@ TEST(KinematicsCache, FollowsChangesOfAnyBlockOnTheChain) {
   EXPECT_LT((arm() - Eigen::Vector3d(1.0, 0, 0.9)).norm(), kTol);
   // The same values in another buffer (as Ceres' candidate points are) give the same pose.
   Eigen::VectorXd copy = theta;
-  EXPECT_LT((cache.Update(2, ChainBlocks(s, 2, copy.data()).data()).position[2] - Eigen::Vector3d(1.0, 0, 0.9)).norm(), kTol);
+  EXPECT_LT((cache.Update(2, ChainBlocks(s, 2, copy.data()).data()).position[2] -
+             Eigen::Vector3d(1.0, 0, 0.9))
+                .norm(),
+            kTol);
 }
 
 TEST(Skeleton, RejectsMalformedTrees) {
   Skeleton s;
   std::string error;
   EXPECT_FALSE(Skeleton::Create({}, &s, &error));
-  EXPECT_FALSE(Skeleton::Create({{"a", -1, {0, 0, 0}}, {"b", 2, {0, 0, 0}}, {"c", 0, {0, 0, 0}}}, &s, &error));
+  EXPECT_FALSE(Skeleton::Create({{"a", -1, {0, 0, 0}}, {"b", 2, {0, 0, 0}}, {"c", 0, {0, 0, 0}}},
+                                &s, &error));
   EXPECT_FALSE(Skeleton::Create({{"a", -1, {0, 0, 0}}, {"a", 0, {0, 0, 0}}}, &s, &error));
   EXPECT_FALSE(Skeleton::Create({{"a", -1, {0, 0, 0}}, {"b", -1, {0, 0, 0}}}, &s, &error));
   EXPECT_FALSE(Skeleton::Create({{"a", -1, {0, NAN, 0}}}, &s, &error));

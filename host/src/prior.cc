@@ -57,13 +57,8 @@ bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* er
 }
 
 bool LoadPosePriorJson(const std::string& path, PosePrior* out, std::string* error) {
-  std::string text;
-  if (!internal::ReadTextFile(path, &text, error)) return false;
-  if (!ParsePosePriorJson(text, out, error)) {
-    *error = path + ": " + *error;
-    return false;
-  }
-  return true;
+  return internal::LoadFile(
+      path, error, [&](const std::string& text) { return ParsePosePriorJson(text, out, error); });
 }
 
 std::string PosePriorToJson(const PosePrior& prior) {
@@ -74,8 +69,8 @@ std::string PosePriorToJson(const PosePrior& prior) {
   j["sigma"] = std::vector<double>(prior.sigma.data(), prior.sigma.data() + prior.rank());
   j["basis"] = nlohmann::json::array();
   for (int c = 0; c < prior.rank(); ++c) {
-    j["basis"].push_back(std::vector<double>(prior.basis.col(c).data(),
-                                             prior.basis.col(c).data() + prior.dof()));
+    j["basis"].push_back(
+        std::vector<double>(prior.basis.col(c).data(), prior.basis.col(c).data() + prior.dof()));
   }
   return j.dump();
 }

@@ -18,7 +18,8 @@ KeypointLayout KeypointLayout::ScaledTo(const Skeleton& skeleton) const {
 namespace {
 
 bool ReadBone(const nlohmann::json& j, const Skeleton& skeleton, int* bone, std::string* error) {
-  const std::string name = j.contains("bone") && j["bone"].is_string() ? j["bone"].get<std::string>() : "";
+  const std::string name =
+      j.contains("bone") && j["bone"].is_string() ? j["bone"].get<std::string>() : "";
   *bone = skeleton.BoneIndex(name);
   if (*bone < 0) *error = "unknown bone '" + name + "'";
   return *bone >= 0;
@@ -31,8 +32,8 @@ bool ReadOptionalVector3(const nlohmann::json& j, const char* key, Eigen::Vector
 
 }  // namespace
 
-bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton,
-                             KeypointLayout* out, std::string* error) {
+bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, KeypointLayout* out,
+                             std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.layout/1" || !j.contains("keypoints") ||
@@ -62,19 +63,15 @@ bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton,
   return true;
 }
 
-bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton,
-                            KeypointLayout* out, std::string* error) {
-  std::string text;
-  if (!internal::ReadTextFile(path, &text, error)) return false;
-  if (!ParseKeypointLayoutJson(text, skeleton, out, error)) {
-    *error = path + ": " + *error;
-    return false;
-  }
-  return true;
+bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton, KeypointLayout* out,
+                            std::string* error) {
+  return internal::LoadFile(path, error, [&](const std::string& text) {
+    return ParseKeypointLayoutJson(text, skeleton, out, error);
+  });
 }
 
-bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton,
-                       std::vector<ImuSite>* out, std::string* error) {
+bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::vector<ImuSite>* out,
+                       std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.imus/1" || !j.contains("imus") ||
@@ -88,7 +85,8 @@ bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton,
     site.name = ji.is_object() ? ji.value("name", "") : "";
     Eigen::Vector3d mount(0, 0, 0), reference(0, 0, 0);
     if (site.name.empty() || !ReadBone(ji, skeleton, &site.bone, error) ||
-        !ReadOptionalVector3(ji, "mount", &mount) || !ReadOptionalVector3(ji, "offset", &site.offset) ||
+        !ReadOptionalVector3(ji, "mount", &mount) ||
+        !ReadOptionalVector3(ji, "offset", &site.offset) ||
         !ReadOptionalVector3(ji, "reference", &reference)) {
       *error = "imu '" + site.name + "': " + (error->empty() ? "bad name or vector" : *error);
       return false;
@@ -101,15 +99,11 @@ bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton,
   return true;
 }
 
-bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton,
-                      std::vector<ImuSite>* out, std::string* error) {
-  std::string text;
-  if (!internal::ReadTextFile(path, &text, error)) return false;
-  if (!ParseImuSitesJson(text, skeleton, out, error)) {
-    *error = path + ": " + *error;
-    return false;
-  }
-  return true;
+bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton, std::vector<ImuSite>* out,
+                      std::string* error) {
+  return internal::LoadFile(path, error, [&](const std::string& text) {
+    return ParseImuSitesJson(text, skeleton, out, error);
+  });
 }
 
 }  // namespace mocap

@@ -8,10 +8,10 @@
 namespace mocap {
 
 const char* const kCanonicalBoneNames[21] = {
-    "pelvis",     "spine_lower", "spine_upper", "neck",       "head",      "clavicle_l",
-    "upper_arm_l", "forearm_l",  "hand_l",      "clavicle_r", "upper_arm_r", "forearm_r",
-    "hand_r",     "thigh_l",     "shin_l",      "foot_l",     "toes_l",    "thigh_r",
-    "shin_r",     "foot_r",      "toes_r"};
+    "pelvis",      "spine_lower", "spine_upper", "neck",       "head",        "clavicle_l",
+    "upper_arm_l", "forearm_l",   "hand_l",      "clavicle_r", "upper_arm_r", "forearm_r",
+    "hand_r",      "thigh_l",     "shin_l",      "foot_l",     "toes_l",      "thigh_r",
+    "shin_r",      "foot_r",      "toes_r"};
 
 bool Skeleton::Create(std::vector<Bone> bones, Skeleton* out, std::string* error) {
   if (bones.empty()) {
@@ -108,13 +108,8 @@ bool ParseSkeletonJson(const std::string& text, Skeleton* out, std::string* erro
 }
 
 bool LoadSkeletonJson(const std::string& path, Skeleton* out, std::string* error) {
-  std::string text;
-  if (!internal::ReadTextFile(path, &text, error)) return false;
-  if (!ParseSkeletonJson(text, out, error)) {
-    *error = path + ": " + *error;
-    return false;
-  }
-  return true;
+  return internal::LoadFile(
+      path, error, [&](const std::string& text) { return ParseSkeletonJson(text, out, error); });
 }
 
 std::string SkeletonToJson(const Skeleton& skeleton) {
@@ -125,7 +120,8 @@ std::string SkeletonToJson(const Skeleton& skeleton) {
   for (const auto& bone : skeleton.bones()) {
     nlohmann::json jb;
     jb["name"] = bone.name;
-    jb["parent"] = bone.parent < 0 ? nlohmann::json() : nlohmann::json(skeleton.bone(bone.parent).name);
+    jb["parent"] =
+        bone.parent < 0 ? nlohmann::json() : nlohmann::json(skeleton.bone(bone.parent).name);
     jb["offset"] = {bone.offset.x(), bone.offset.y(), bone.offset.z()};
     j["bones"].push_back(jb);
   }

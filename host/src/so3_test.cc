@@ -1,8 +1,8 @@
 #include "mocap/so3.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 namespace mocap {
 namespace {
@@ -17,8 +17,9 @@ TEST(So3, ExpMatchesEigenAngleAxis) {
 }
 
 TEST(So3, LogInvertsExpIncludingNearZeroAndNearPi) {
-  for (const Eigen::Vector3d& w : {Eigen::Vector3d(1e-9, 0, 0), Eigen::Vector3d(0.2, 0.1, -0.3),
-                                   Eigen::Vector3d(0, 0, M_PI - 1e-7), Eigen::Vector3d(1.0, 2.0, 0.5)}) {
+  for (const Eigen::Vector3d& w :
+       {Eigen::Vector3d(1e-9, 0, 0), Eigen::Vector3d(0.2, 0.1, -0.3),
+        Eigen::Vector3d(0, 0, M_PI - 1e-7), Eigen::Vector3d(1.0, 2.0, 0.5)}) {
     EXPECT_LT((Log(Exp(w)) - w).norm(), 1e-7) << w.transpose();
   }
 }

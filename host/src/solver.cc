@@ -1,9 +1,9 @@
 #include "mocap/solver.h"
 
+#include <ceres/ceres.h>
+
 #include <chrono>
 #include <cmath>
-
-#include <ceres/ceres.h>
 
 #include "mocap/initialisation.h"
 #include "mocap/residuals/acceleration_residual.h"
@@ -16,11 +16,16 @@ namespace mocap {
 
 const char* ToString(SolveStatus status) {
   switch (status) {
-    case SolveStatus::kOk: return "ok";
-    case SolveStatus::kInitialised: return "initialised";
-    case SolveStatus::kNoObservations: return "no_observations";
-    case SolveStatus::kRejectedFrame: return "rejected_frame";
-    case SolveStatus::kFailed: return "failed";
+    case SolveStatus::kOk:
+      return "ok";
+    case SolveStatus::kInitialised:
+      return "initialised";
+    case SolveStatus::kNoObservations:
+      return "no_observations";
+    case SolveStatus::kRejectedFrame:
+      return "rejected_frame";
+    case SolveStatus::kFailed:
+      return "failed";
   }
   return "unknown";
 }
@@ -28,7 +33,8 @@ const char* ToString(SolveStatus status) {
 namespace {
 
 bool TermIsValid(const TermOptions& t, const char* name, std::string* error) {
-  if (!(std::isfinite(t.weight) && t.weight >= 0.0 && std::isfinite(t.loss_scale) && t.loss_scale > 0.0)) {
+  if (!(std::isfinite(t.weight) && t.weight >= 0.0 && std::isfinite(t.loss_scale) &&
+        t.loss_scale > 0.0)) {
     *error = std::string(name) + ": weight must be >= 0 and loss_scale > 0";
     return false;
   }
@@ -37,9 +43,12 @@ bool TermIsValid(const TermOptions& t, const char* name, std::string* error) {
 
 ceres::LossFunction* MakeLoss(const TermOptions& t) {
   switch (t.loss) {
-    case LossType::kCauchy: return new ceres::CauchyLoss(t.loss_scale);
-    case LossType::kHuber: return new ceres::HuberLoss(t.loss_scale);
-    case LossType::kTrivial: return nullptr;
+    case LossType::kCauchy:
+      return new ceres::CauchyLoss(t.loss_scale);
+    case LossType::kHuber:
+      return new ceres::HuberLoss(t.loss_scale);
+    case LossType::kTrivial:
+      return nullptr;
   }
   return nullptr;
 }
@@ -52,7 +61,8 @@ constexpr double kCoarseLossBoost = 1e4;
 }  // namespace
 
 bool SolverOptions::IsValid(std::string* error) const {
-  if (!TermIsValid(orientation, "orientation", error) || !TermIsValid(position, "position", error) ||
+  if (!TermIsValid(orientation, "orientation", error) ||
+      !TermIsValid(position, "position", error) ||
       !TermIsValid(acceleration, "acceleration", error) ||
       !TermIsValid(pca_projection, "pca_projection", error) ||
       !TermIsValid(pca_deviation, "pca_deviation", error)) {
@@ -60,8 +70,8 @@ bool SolverOptions::IsValid(std::string* error) const {
   }
   if (!accel_at_rest.allFinite() || !(min_confidence >= 0.0 && min_confidence < 1.0) ||
       !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) || max_iterations < 1 ||
-      max_initial_iterations < 1 || !(function_tolerance >= 0.0) ||
-      !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0)) {
+      max_initial_iterations < 1 || !(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
+      !(parameter_tolerance >= 0.0)) {
     *error = "solver options out of range";
     return false;
   }
@@ -136,7 +146,8 @@ Eigen::VectorXd Solver::WarmStart(double timestamp) const {
   const SolvedFrame& a = history_[0];
   const SolvedFrame& b = history_[1];
   const double h1 = b.timestamp - a.timestamp, h2 = timestamp - b.timestamp;
-  if (!(h1 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap)) return theta_;
+  if (!(h1 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap))
+    return theta_;
   const double s = h2 / h1;
   Eigen::VectorXd x = theta_;
   x.head<3>() += s * (b.theta.head<3>() - a.theta.head<3>());
@@ -164,10 +175,11 @@ Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts*
     const Camera& cam = rig_.cameras[obs.camera];
     for (int k = 0; k < layout_.size(); ++k) {
       const Keypoint2D& kp = obs.keypoints[k];
-      const bool finite = std::isfinite(kp.x) && std::isfinite(kp.y) && std::isfinite(kp.confidence);
+      const bool finite =
+          std::isfinite(kp.x) && std::isfinite(kp.y) && std::isfinite(kp.confidence);
       const bool plausible = finite && kp.confidence >= 0.0 && kp.confidence <= 1.0 + 1e-9 &&
-                             kp.x > -cam.width && kp.x < 2.0 * cam.width &&
-                             kp.y > -cam.height && kp.y < 2.0 * cam.height;
+                             kp.x > -cam.width && kp.x < 2.0 * cam.width && kp.y > -cam.height &&
+                             kp.y < 2.0 * cam.height;
       if (!plausible) {
         ++counts->keypoints_invalid;
       } else if (kp.confidence <= options_.min_confidence) {
@@ -193,7 +205,8 @@ Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts*
       continue;
     }
     const Eigen::Matrix3d world =
-        imus_[obs.imu].reference * Eigen::Quaterniond(obs.orientation.coeffs() / qn).toRotationMatrix();
+        imus_[obs.imu].reference *
+        Eigen::Quaterniond(obs.orientation.coeffs() / qn).toRotationMatrix();
     clean.imu_world[obs.imu] = world;
     if (obs.has_acceleration) {
       if (obs.acceleration.allFinite()) {
@@ -221,7 +234,8 @@ void Solver::Remember(const CleanFrame& frame) {
 void Solver::UpdatePriorResiduals() {
   if (!prior_) return;
   if (prior_->rank() < prior_->dof() && options_.pca_projection.weight != pca_projection_weight_) {
-    pca_projection_ = std::make_unique<PcaProjectionResidual>(*prior_, options_.pca_projection.weight);
+    pca_projection_ =
+        std::make_unique<PcaProjectionResidual>(*prior_, options_.pca_projection.weight);
     pca_projection_weight_ = options_.pca_projection.weight;
   }
   if (options_.pca_deviation.weight != pca_deviation_weight_) {
@@ -261,12 +275,15 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
       const Site& site = layout_.sites[d.keypoint];
       const Camera& cam = rig_.cameras[d.camera];
       Eigen::Vector2d pixel;
-      if (!cam.Project(start_pose.position[site.bone] + start_pose.rotation[site.bone] * site.offset, &pixel)) {
+      if (!cam.Project(
+              start_pose.position[site.bone] + start_pose.rotation[site.bone] * site.offset,
+              &pixel)) {
         ++result->counts.keypoints_behind_camera;
         continue;
       }
       blocks[1].push_back(problem.AddResidualBlock(
-          own(new PositionResidual(&fk, &cam, site, d.pixel, d.confidence, options_.position.weight)),
+          own(new PositionResidual(&fk, &cam, site, d.pixel, d.confidence,
+                                   options_.position.weight)),
           position_loss.get(), ChainBlocks(skeleton_, site.bone, x->data())));
     }
   }
@@ -275,18 +292,20 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   const bool have_history = history_.size() == 2;
   const double h2 = have_history ? frame.timestamp - history_[1].timestamp : 0.0;
   const double h1 = have_history ? history_[1].timestamp - history_[0].timestamp : 0.0;
-  const bool accel_ready = have_history && h1 > 0.0 && h2 > 0.0 &&
-                           h1 <= options_.max_history_gap && h2 <= options_.max_history_gap;
+  const bool accel_ready = have_history && h1 > 0.0 && h2 > 0.0 && h1 <= options_.max_history_gap &&
+                           h2 <= options_.max_history_gap;
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (frame.imu_world[i] && Active(options_.orientation)) {
       blocks[0].push_back(problem.AddResidualBlock(
-          own(new OrientationResidual(&fk, imus_[i], *frame.imu_world[i], options_.orientation.weight)),
+          own(new OrientationResidual(&fk, imus_[i], *frame.imu_world[i],
+                                      options_.orientation.weight)),
           orientation_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
     }
     if (accel_ready && last_accel_[i] && Active(options_.acceleration)) {
       blocks[2].push_back(problem.AddResidualBlock(
-          own(new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i],
-                                   h1, h2, *last_accel_[i], options_.acceleration.weight)),
+          own(new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i],
+                                       history_[0].imu_sites[i], h1, h2, *last_accel_[i],
+                                       options_.acceleration.weight)),
           acceleration_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
     }
   }
@@ -294,12 +313,15 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   result->counts.accelerations_used = static_cast<int>(blocks[2].size());
 
   std::vector<double*> joint_blocks;
-  for (int b = 1; b < skeleton_.num_bones(); ++b) joint_blocks.push_back(x->data() + BlockOffset(b));
+  for (int b = 1; b < skeleton_.num_bones(); ++b)
+    joint_blocks.push_back(x->data() + BlockOffset(b));
   if (pca_projection_ && Active(options_.pca_projection)) {
-    blocks[3].push_back(problem.AddResidualBlock(pca_projection_.get(), projection_loss.get(), joint_blocks));
+    blocks[3].push_back(
+        problem.AddResidualBlock(pca_projection_.get(), projection_loss.get(), joint_blocks));
   }
   if (pca_deviation_ && Active(options_.pca_deviation)) {
-    blocks[4].push_back(problem.AddResidualBlock(pca_deviation_.get(), deviation_loss.get(), joint_blocks));
+    blocks[4].push_back(
+        problem.AddResidualBlock(pca_deviation_.get(), deviation_loss.get(), joint_blocks));
   }
   if (blocks[0].empty() && blocks[1].empty()) {
     result->status = SolveStatus::kNoObservations;
@@ -319,11 +341,13 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   result->iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result->timings = {1e3 * summary.total_time_in_seconds, 1e3 * summary.linear_solver_time_in_seconds,
+  result->timings = {1e3 * summary.total_time_in_seconds,
+                     1e3 * summary.linear_solver_time_in_seconds,
                      1e3 * summary.jacobian_evaluation_time_in_seconds,
                      1e3 * summary.residual_evaluation_time_in_seconds};
 
-  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() || !x->allFinite()) {
+  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
+      !x->allFinite()) {
     result->status = SolveStatus::kFailed;
     result->message = "optimiser failed: " + summary.message;
     return false;
@@ -332,8 +356,9 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   if (blocks[1].empty()) result->flags |= kPositionUnconstrained;
   if (!accel_ready) result->flags |= kAccelerationUnavailable;
 
-  double* costs[5] = {&result->costs.orientation, &result->costs.position, &result->costs.acceleration,
-                      &result->costs.pca_projection, &result->costs.pca_deviation};
+  double* costs[5] = {&result->costs.orientation, &result->costs.position,
+                      &result->costs.acceleration, &result->costs.pca_projection,
+                      &result->costs.pca_deviation};
   for (int t = 0; t < 5; ++t) {
     for (ceres::ResidualBlockId id : blocks[t]) {
       double cost = 0.0;
@@ -360,7 +385,8 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
 
   if (!std::isfinite(frame.timestamp) ||
       (!history_.empty() && frame.timestamp <= history_.back().timestamp)) {
-    return finish(SolveStatus::kRejectedFrame, "timestamp not finite or not after the previous frame");
+    return finish(SolveStatus::kRejectedFrame,
+                  "timestamp not finite or not after the previous frame");
   }
   const CleanFrame clean = Validate(frame, &result.counts);
   int orientations = 0;
@@ -374,7 +400,8 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   Eigen::VectorXd x = WarmStart(frame.timestamp);
   warm_start_given_ = false;
   if (initialising) {
-    x = EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world).theta;
+    x = EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world)
+            .theta;
   }
 
   if (initialising) {

@@ -1,8 +1,8 @@
 #include "mocap/solver.h"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "mocap/so3.h"
 #include "synthetic_scene.h"
@@ -11,8 +11,8 @@ namespace mocap {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-constexpr double kMaxJointError = 1e-3;         // metres
-constexpr double kMaxBoneError = 0.1 * kDeg;    // radians
+constexpr double kMaxJointError = 1e-3;       // metres
+constexpr double kMaxBoneError = 0.1 * kDeg;  // radians
 
 SolverOptions ExactOptions() {
   SolverOptions o;
@@ -26,7 +26,8 @@ SolverOptions ExactOptions() {
 std::unique_ptr<Solver> MakeSolver(const testing::Scene& scene, std::optional<PosePrior> prior,
                                    SolverOptions options = ExactOptions()) {
   std::string error;
-  auto solver = Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, prior, options, &error);
+  auto solver =
+      Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, prior, options, &error);
   EXPECT_NE(solver, nullptr) << error;
   return solver;
 }
@@ -46,7 +47,8 @@ TEST(Solver, RecoversRandomPosesFromTenDegreesAway) {
     const Eigen::VectorXd velocity = 0.5 * (testing::RandomPose(scene.skeleton, &rng) - base);
     const double dt = 1.0 / 60.0;
     std::vector<Eigen::VectorXd> truth;
-    for (int f = 0; f < 3; ++f) truth.push_back(base + velocity * (f * dt) + 0.3 * velocity * (f * f * dt * dt));
+    for (int f = 0; f < 3; ++f)
+      truth.push_back(base + velocity * (f * dt) + 0.3 * velocity * (f * f * dt * dt));
     auto solver = MakeSolver(scene, testing::PriorThrough(truth, 23, &rng));
     std::vector<FrameObservations> frames;
     for (int f = 0; f < 3; ++f) frames.push_back(testing::Render(scene, truth[f], f * dt));
@@ -63,8 +65,10 @@ TEST(Solver, RecoversRandomPosesFromTenDegreesAway) {
     EXPECT_EQ(r.counts.orientations_used, 13);
     EXPECT_EQ(r.counts.keypoints_used + r.counts.keypoints_not_detected, 8 * 33);
     EXPECT_FALSE(r.flags & kAccelerationUnavailable);
-    EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, truth[2]), kMaxJointError) << "trial " << trial;
-    EXPECT_LT(testing::MaxBoneAngleError(scene.skeleton, r.theta, truth[2]), kMaxBoneError) << "trial " << trial;
+    EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, truth[2]), kMaxJointError)
+        << "trial " << trial;
+    EXPECT_LT(testing::MaxBoneAngleError(scene.skeleton, r.theta, truth[2]), kMaxBoneError)
+        << "trial " << trial;
   }
 }
 
@@ -119,14 +123,15 @@ TEST(Solver, AnySubsetOfSensorsPerFrame) {
     const double s = f / 29.0;
     Eigen::VectorXd truth = a + s * (b - a);
     FrameObservations obs = testing::Render(scene, truth, t);
-    if (f >= 10 && f < 15) obs.imus.clear();                          // video only
+    if (f >= 10 && f < 15) obs.imus.clear();                            // video only
     if (f >= 15 && f < 20) obs.cameras.erase(obs.cameras.begin() + 1);  // camera 1 drops out
-    if (f >= 20 && f < 23) obs.cameras.clear();                        // IMU only
+    if (f >= 20 && f < 23) obs.cameras.clear();                         // IMU only
     const SolveResult r = solver->Solve(obs);
     ExpectFinite(r);
     ASSERT_TRUE(r.status == SolveStatus::kOk || r.status == SolveStatus::kInitialised) << r.message;
     EXPECT_EQ(static_cast<bool>(r.flags & kPositionUnconstrained), f >= 20 && f < 23);
-    const double tolerance = (f >= 20 && f < 23) ? 0.05 : kMaxJointError;  // IMU-only: position held
+    const double tolerance =
+        (f >= 20 && f < 23) ? 0.05 : kMaxJointError;  // IMU-only: position held
     EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), tolerance) << "frame " << f;
   }
 }
@@ -162,7 +167,7 @@ TEST(Solver, TermsCanBeSwitchedOffAndReportTheirCosts) {
   EXPECT_EQ(r.costs.orientation, 0.0);
   EXPECT_GT(r.costs.pca_projection, 0.0);  // the prior's mean is not the pose
   EXPECT_GT(r.costs.pca_deviation, 0.0);
-  EXPECT_GT(r.costs.position, 0.0);        // so the data gives way a little
+  EXPECT_GT(r.costs.position, 0.0);  // so the data gives way a little
 }
 
 TEST(Solver, DegenerateInputGivesAStatusNeverANaN) {
@@ -178,17 +183,17 @@ TEST(Solver, DegenerateInputGivesAStatusNeverANaN) {
 
   FrameObservations f = testing::Render(scene, truth, 0.0);
   for (ImuObservation& imu : f.imus) imu.has_acceleration = true;
-  f.cameras[0].keypoints[0].x = NAN;                 // NaN detection
-  f.cameras[0].keypoints[1].confidence = 0.0;        // zero confidence
+  f.cameras[0].keypoints[0].x = NAN;           // NaN detection
+  f.cameras[0].keypoints[1].confidence = 0.0;  // zero confidence
   f.cameras[0].keypoints[2].confidence = NAN;
-  f.cameras[1].keypoints[3].y = 1e9;                 // absurd pixel
-  f.imus[0].orientation.coeffs() *= 2.0;             // non-unit quaternion
+  f.cameras[1].keypoints[3].y = 1e9;      // absurd pixel
+  f.imus[0].orientation.coeffs() *= 2.0;  // non-unit quaternion
   f.imus[1].orientation.coeffs()(0) = NAN;
   f.imus[2].acceleration.x() = INFINITY;
-  f.imus.push_back(f.imus[3]);                       // duplicate sensor
+  f.imus.push_back(f.imus[3]);  // duplicate sensor
   f.imus.back().imu = 3;
   f.cameras.push_back(f.cameras[0]);
-  f.cameras.back().camera = 99;                      // unknown camera
+  f.cameras.back().camera = 99;  // unknown camera
   r = solver->Solve(f);
   ASSERT_EQ(r.status, SolveStatus::kInitialised) << r.message;
   ExpectFinite(r);
@@ -232,11 +237,15 @@ TEST(Solver, RejectsInconsistentConfiguration) {
   std::string error;
   std::mt19937 rng(1);
   PosePrior wrong = testing::RandomPrior(30, 5, Eigen::VectorXd::Zero(66), &rng);
-  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, wrong, SolverOptions(), &error), nullptr);
+  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, wrong,
+                           SolverOptions(), &error),
+            nullptr);
   EXPECT_NE(error.find("DOF"), std::string::npos);
   SolverOptions bad;
   bad.position.weight = -1;
-  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, std::nullopt, bad, &error), nullptr);
+  EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, std::nullopt, bad,
+                           &error),
+            nullptr);
 }
 
 }  // namespace

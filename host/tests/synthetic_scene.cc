@@ -1,22 +1,26 @@
 #include "synthetic_scene.h"
 
-#include <cmath>
+#include <gtest/gtest.h>
 
 #include <Eigen/QR>
-#include <gtest/gtest.h>
+#include <cmath>
 
 #include "mocap/so3.h"
 
 namespace mocap::testing {
 
-std::string DataPath(const std::string& relative) { return std::string(MOCAP_DATA_DIR) + "/" + relative; }
+std::string DataPath(const std::string& relative) {
+  return std::string(MOCAP_DATA_DIR) + "/" + relative;
+}
 
 Scene MakeScene(int cameras, const std::string& layout) {
   Scene s;
   std::string error;
   EXPECT_TRUE(LoadSkeletonJson(DataPath("skeleton_default.json"), &s.skeleton, &error)) << error;
   KeypointLayout raw;
-  EXPECT_TRUE(LoadKeypointLayoutJson(DataPath("layouts/" + layout + ".json"), s.skeleton, &raw, &error)) << error;
+  EXPECT_TRUE(
+      LoadKeypointLayoutJson(DataPath("layouts/" + layout + ".json"), s.skeleton, &raw, &error))
+      << error;
   s.layout = raw.ScaledTo(s.skeleton);
   EXPECT_TRUE(LoadImuSitesJson(DataPath("imus13.json"), s.skeleton, &s.imus, &error)) << error;
   for (size_t i = 0; i < s.imus.size(); ++i) {  // mounting 10-20 deg, reference heading offsets
@@ -35,9 +39,9 @@ Scene MakeScene(int cameras, const std::string& layout) {
     const double a = 2.0 * M_PI * c / cameras;
     const Eigen::Vector3d center(4.5 * std::cos(a), 4.5 * std::sin(a), 1.5 + 0.1 * c);
     const Eigen::Vector3d target(0, 0, 1.0);
-    const Eigen::Vector3d z = (target - center).normalized();       // forward
+    const Eigen::Vector3d z = (target - center).normalized();                  // forward
     const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();  // right
-    const Eigen::Vector3d y = z.cross(x);                            // down
+    const Eigen::Vector3d y = z.cross(x);                                      // down
     Eigen::Matrix3d r_cw;
     r_cw.row(0) = x;
     r_cw.row(1) = y;
@@ -58,7 +62,8 @@ Eigen::VectorXd RandomPose(const Skeleton& skeleton, std::mt19937* rng, double m
   return theta;
 }
 
-Eigen::VectorXd Perturb(const Eigen::VectorXd& theta, double angle, double shift, std::mt19937* rng) {
+Eigen::VectorXd Perturb(const Eigen::VectorXd& theta, double angle, double shift,
+                        std::mt19937* rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::VectorXd out = theta;
   out.head<3>() += shift * Eigen::Vector3d(n(*rng), n(*rng), n(*rng)).normalized();
@@ -86,7 +91,8 @@ FrameObservations Render(const Scene& scene, const Eigen::VectorXd& theta, doubl
     for (const Site& site : scene.layout.sites) {
       Eigen::Vector2d px;
       Keypoint2D kp;
-      if (scene.rig.cameras[c].Project(pose.position[site.bone] + pose.rotation[site.bone] * site.offset, &px)) {
+      if (scene.rig.cameras[c].Project(
+              pose.position[site.bone] + pose.rotation[site.bone] * site.offset, &px)) {
         kp = {px.x(), px.y(), 1.0};
       }
       obs.keypoints.push_back(kp);
@@ -115,7 +121,8 @@ void SetAccelerations(const Scene& scene, const Eigen::VectorXd& theta0, double 
   const double h1 = t1 - t0, h2 = t2 - t1;
   for (ImuObservation& obs : frame1->imus) {
     const ImuSite& s = scene.imus[obs.imu];
-    const Eigen::Vector3d x0 = ImuSiteWorld(p0, s), x1 = ImuSiteWorld(p1, s), x2 = ImuSiteWorld(p2, s);
+    const Eigen::Vector3d x0 = ImuSiteWorld(p0, s), x1 = ImuSiteWorld(p1, s),
+                          x2 = ImuSiteWorld(p2, s);
     const Eigen::Vector3d a_world = 2.0 * ((x2 - x1) / h2 - (x1 - x0) / h1) / (h1 + h2);
     // a = R_ig R_i a_i - a_g  =>  a_i = (R_ig R_i)^T (a + a_g)
     const Eigen::Matrix3d sensor_world = p1.rotation[s.bone] * s.mount;
@@ -135,7 +142,8 @@ double MaxJointError(const Skeleton& skeleton, const Eigen::VectorXd& a, const E
   return worst;
 }
 
-double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a,
+                         const Eigen::VectorXd& b) {
   BodyPose pa, pb;
   ForwardKinematics(skeleton, a.data(), &pa);
   ForwardKinematics(skeleton, b.data(), &pb);

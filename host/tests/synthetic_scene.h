@@ -30,7 +30,8 @@ Eigen::VectorXd RandomPose(const Skeleton& skeleton, std::mt19937* rng, double m
 
 // Every joint rotated by `angle` radians about a random axis (root position moved by
 // `shift` metres): the "10 degrees away" start.
-Eigen::VectorXd Perturb(const Eigen::VectorXd& theta, double angle, double shift, std::mt19937* rng);
+Eigen::VectorXd Perturb(const Eigen::VectorXd& theta, double angle, double shift,
+                        std::mt19937* rng);
 
 // Exact observations of theta: keypoints in every camera (confidence 1), orientations of
 // every IMU. Accelerations are left at zero; use SetAccelerations for a sequence.
@@ -44,7 +45,8 @@ void SetAccelerations(const Scene& scene, const Eigen::VectorXd& theta0, double 
 
 // Largest joint position error (metres) and bone orientation error (radians).
 double MaxJointError(const Skeleton& skeleton, const Eigen::VectorXd& a, const Eigen::VectorXd& b);
-double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a,
+                         const Eigen::VectorXd& b);
 
 // Largest error of the layout's keypoint sites (metres): what the cameras observe.
 double MaxSiteError(const Scene& scene, const Eigen::VectorXd& a, const Eigen::VectorXd& b);

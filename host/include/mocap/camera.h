@@ -8,11 +8,10 @@
 #ifndef MOCAP_CAMERA_H_
 #define MOCAP_CAMERA_H_
 
+#include <Eigen/Core>
 #include <array>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace mocap {
 
@@ -21,9 +20,9 @@ struct Camera {
   static constexpr double kMinDepth = 0.05;
 
   std::string name;
-  int width = 0, height = 0;                  // pixels
-  double fx = 0, fy = 0, cx = 0, cy = 0;      // pixels
-  std::array<double, 5> distortion{};         // k1, k2, p1, p2, k3
+  int width = 0, height = 0;                               // pixels
+  double fx = 0, fy = 0, cx = 0, cy = 0;                   // pixels
+  std::array<double, 5> distortion{};                      // k1, k2, p1, p2, k3
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // world -> camera
   Eigen::Vector3d translation{0, 0, 0};                    // world -> camera, metres
 

@@ -10,10 +10,9 @@
 #ifndef MOCAP_INITIALISATION_H_
 #define MOCAP_INITIALISATION_H_
 
+#include <Eigen/Core>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "mocap/camera.h"
 #include "mocap/sites.h"

@@ -15,11 +15,10 @@
 #ifndef MOCAP_KINEMATICS_H_
 #define MOCAP_KINEMATICS_H_
 
-#include <cstdint>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
 
 #include "mocap/skeleton.h"
 

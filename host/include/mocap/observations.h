@@ -5,29 +5,28 @@
 #ifndef MOCAP_OBSERVATIONS_H_
 #define MOCAP_OBSERVATIONS_H_
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-
 namespace mocap {
 
 struct Keypoint2D {
-  double x = 0, y = 0;      // pixels, distorted image
-  double confidence = 0;    // [0, 1]; 0 means "not detected"
+  double x = 0, y = 0;    // pixels, distorted image
+  double confidence = 0;  // [0, 1]; 0 means "not detected"
 };
 
 struct CameraObservation {
-  int camera = 0;                      // index into the rig
-  std::vector<Keypoint2D> keypoints;   // in the layout's order, one per keypoint
+  int camera = 0;                     // index into the rig
+  std::vector<Keypoint2D> keypoints;  // in the layout's order, one per keypoint
 };
 
 struct ImuObservation {
-  int imu = 0;                                    // index into the IMU sites
-  Eigen::Quaterniond orientation{1, 0, 0, 0};     // R_i: sensor -> IMU reference frame
-  Eigen::Vector3d acceleration{0, 0, 0};          // a_i: m/s^2, sensor frame, gravity included
+  int imu = 0;                                 // index into the IMU sites
+  Eigen::Quaterniond orientation{1, 0, 0, 0};  // R_i: sensor -> IMU reference frame
+  Eigen::Vector3d acceleration{0, 0, 0};       // a_i: m/s^2, sensor frame, gravity included
   bool has_orientation = true;
   bool has_acceleration = true;
 };
@@ -39,18 +38,18 @@ struct FrameObservations {
 };
 
 enum class SolveStatus {
-  kOk,                // solved from the warm start
-  kInitialised,       // first frame (or after a reset): solved from an initial guess
-  kNoObservations,    // nothing usable in the frame: the previous pose is held
-  kRejectedFrame,     // timestamp not finite or not after the previous frame
-  kFailed,            // the optimiser failed: the previous pose is held
+  kOk,              // solved from the warm start
+  kInitialised,     // first frame (or after a reset): solved from an initial guess
+  kNoObservations,  // nothing usable in the frame: the previous pose is held
+  kRejectedFrame,   // timestamp not finite or not after the previous frame
+  kFailed,          // the optimiser failed: the previous pose is held
 };
 const char* ToString(SolveStatus status);
 
 // Quality flags (bit mask).
 enum QualityFlag : uint32_t {
-  kPositionUnconstrained = 1u << 0,  // no camera constrained the pose: global position drifts
-  kIterationLimit = 1u << 1,         // stopped at the iteration limit, not by convergence
+  kPositionUnconstrained = 1u << 0,    // no camera constrained the pose: global position drifts
+  kIterationLimit = 1u << 1,           // stopped at the iteration limit, not by convergence
   kAccelerationUnavailable = 1u << 2,  // no acceleration history (first frames, after a gap)
 };
 
@@ -66,10 +65,10 @@ struct InputCounts {
   int keypoints_invalid = 0;        // NaN / inf, confidence out of range, far outside the image
   int keypoints_behind_camera = 0;  // site behind the camera at the start of the solve
   int orientations_used = 0;
-  int orientations_invalid = 0;     // NaN or not a unit quaternion
+  int orientations_invalid = 0;  // NaN or not a unit quaternion
   int accelerations_used = 0;
-  int accelerations_invalid = 0;    // NaN / inf
-  int unknown_sources = 0;          // camera or IMU index not in the rig / IMU set, or duplicate
+  int accelerations_invalid = 0;  // NaN / inf
+  int unknown_sources = 0;        // camera or IMU index not in the rig / IMU set, or duplicate
 };
 
 // Where the time of one solve went, milliseconds (Ceres' own accounting inside).
@@ -82,7 +81,7 @@ struct SolveTimings {
 
 struct SolveResult {
   SolveStatus status = SolveStatus::kNoObservations;
-  Eigen::VectorXd theta;     // always finite
+  Eigen::VectorXd theta;  // always finite
   double timestamp = 0;
   TermCosts costs;
   InputCounts counts;

@@ -5,9 +5,8 @@
 #ifndef MOCAP_PRIOR_H_
 #define MOCAP_PRIOR_H_
 
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 namespace mocap {
 

@@ -13,10 +13,9 @@
 #ifndef MOCAP_SITES_H_
 #define MOCAP_SITES_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "mocap/skeleton.h"
 
@@ -28,10 +27,10 @@ struct Site {
 };
 
 struct KeypointLayout {
-  std::string name;                 // "coco17", "body25b", "blazepose33", ...
-  double reference_height = 0.0;    // RestHeight() of the skeleton the offsets were made for
-  std::vector<std::string> names;   // keypoint names in detector order
-  std::vector<Site> sites;          // same order
+  std::string name;                // "coco17", "body25b", "blazepose33", ...
+  double reference_height = 0.0;   // RestHeight() of the skeleton the offsets were made for
+  std::vector<std::string> names;  // keypoint names in detector order
+  std::vector<Site> sites;         // same order
 
   int size() const { return static_cast<int>(sites.size()); }
   // Offsets scaled by skeleton.RestHeight() / reference_height.
@@ -42,24 +41,24 @@ struct ImuSite {
   std::string name;
   int bone = 0;
   Eigen::Matrix3d mount = Eigen::Matrix3d::Identity();      // sensor -> bone
-  Eigen::Vector3d offset{0, 0, 0};                            // bone frame, metres
+  Eigen::Vector3d offset{0, 0, 0};                          // bone frame, metres
   Eigen::Matrix3d reference = Eigen::Matrix3d::Identity();  // IMU reference -> world
 };
 
 // Layout file: {"format": "mocap.layout/1", "name": ..., "reference_height": m,
 //   "keypoints": [{"name": ..., "bone": ..., "offset": [x, y, z]}, ...]}
-bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton,
-                            KeypointLayout* out, std::string* error);
-bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton,
-                             KeypointLayout* out, std::string* error);
+bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton, KeypointLayout* out,
+                            std::string* error);
+bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, KeypointLayout* out,
+                             std::string* error);
 
 // IMU set file: {"format": "mocap.imus/1", "imus": [{"name": ..., "bone": ...,
 //   "mount": [rotation vector], "offset": [x, y, z], "reference": [rotation vector]}]}
 // "mount", "offset" and "reference" default to identity / zero.
-bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton,
-                      std::vector<ImuSite>* out, std::string* error);
-bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton,
-                       std::vector<ImuSite>* out, std::string* error);
+bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton, std::vector<ImuSite>* out,
+                      std::string* error);
+bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::vector<ImuSite>* out,
+                       std::string* error);
 
 }  // namespace mocap
 

@@ -12,10 +12,9 @@
 #ifndef MOCAP_SKELETON_H_
 #define MOCAP_SKELETON_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace mocap {
 
@@ -26,7 +25,7 @@ class Skeleton {
  public:
   struct Bone {
     std::string name;
-    int parent = -1;               // index of the parent bone, -1 for the root
+    int parent = -1;                  // index of the parent bone, -1 for the root
     Eigen::Vector3d offset{0, 0, 0};  // t_b: bone origin in the parent frame, metres
   };
 

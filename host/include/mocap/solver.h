@@ -5,12 +5,12 @@
 #ifndef MOCAP_SOLVER_H_
 #define MOCAP_SOLVER_H_
 
+#include <ceres/cost_function.h>
+
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <ceres/cost_function.h>
 
 #include "mocap/camera.h"
 #include "mocap/kinematics.h"
@@ -40,17 +40,17 @@ struct SolverOptions {
   // positions, whose own jitter (~5 mm at 60 Hz) is ~20 m/s^2: hence a soft 30 m/s^2.
   TermOptions acceleration{true, 1.0 / (30.0 * 30.0), LossType::kCauchy, 1.0};
   TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
-  TermOptions pca_deviation{true, 0.02, LossType::kTrivial, 1.0};                 // per sigma^2
+  TermOptions pca_deviation{true, 0.02, LossType::kTrivial, 1.0};                  // per sigma^2
 
   Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
-  double min_confidence = 0.05;        // detections at or below are "not detected"
-  double max_quaternion_error = 1e-3;  // | |q| - 1 | above this: the reading is rejected
-  double max_history_gap = 0.25;       // s: older solved frames do not feed E_A or prediction
+  double min_confidence = 0.05;                  // detections at or below are "not detected"
+  double max_quaternion_error = 1e-3;            // | |q| - 1 | above this: the reading is rejected
+  double max_history_gap = 0.25;  // s: older solved frames do not feed E_A or prediction
   // Warm start from a constant-velocity prediction of the two previous solutions (on
   // SO(3) per joint) instead of the previous solution alone.
   bool predict_motion = true;
-  int max_iterations = 10;             // per warm-started frame
-  int max_initial_iterations = 100;    // for the first frame
+  int max_iterations = 10;           // per warm-started frame
+  int max_initial_iterations = 100;  // for the first frame
   // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
   // 2-3 iterations; tighter tolerances add iterations, not accuracy (docs/performance.md).
   double function_tolerance = 1e-3;
@@ -65,9 +65,8 @@ class Solver {
   // Returns null and sets *error when an input is inconsistent. prior may be empty:
   // then the PCA terms are off whatever the options say.
   static std::unique_ptr<Solver> Create(Skeleton skeleton, Rig rig, KeypointLayout layout,
-                                        std::vector<ImuSite> imus,
-                                        std::optional<PosePrior> prior, SolverOptions options,
-                                        std::string* error);
+                                        std::vector<ImuSite> imus, std::optional<PosePrior> prior,
+                                        SolverOptions options, std::string* error);
 
   // Solves one frame. Never throws; result.theta is always finite.
   SolveResult Solve(const FrameObservations& frame);
@@ -115,7 +114,7 @@ class Solver {
 
   Eigen::VectorXd theta_;
   bool initialised_ = false;
-  bool warm_start_given_ = false;  // SetWarmStart since the last solve: no prediction
+  bool warm_start_given_ = false;     // SetWarmStart since the last solve: no prediction
   std::vector<SolvedFrame> history_;  // up to two previous solved frames, newest last
   // Measured world acceleration a(t1) of each IMU at the newest solved frame.
   std::vector<std::optional<Eigen::Vector3d>> last_accel_;

@@ -24,8 +24,7 @@ bool AccelerationResidual::Evaluate(double const* const* parameters, double* res
                                     double** jacobians) const {
   const BodyPose& pose = fk_->Update(site_.bone, parameters);
   const Eigen::Vector3d x = pose.position[site_.bone] + pose.rotation[site_.bone] * site_.offset;
-  const Eigen::Vector3d solved =
-      2.0 * ((x - x1_) / h2_ - (x1_ - x0_) / h1_) / (h1_ + h2_);
+  const Eigen::Vector3d solved = 2.0 * ((x - x1_) / h2_ - (x1_ - x0_) / h1_) / (h1_ + h2_);
   Eigen::Map<Eigen::Vector3d> r(residuals);
   r = sqrt_weight_ * (solved - measured_world_);
   if (jacobians != nullptr) {

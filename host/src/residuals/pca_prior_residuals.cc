@@ -1,8 +1,7 @@
 #include "mocap/residuals/pca_prior_residuals.h"
 
-#include <cmath>
-
 #include <Eigen/QR>
+#include <cmath>
 
 namespace mocap {
 
@@ -16,13 +15,15 @@ bool LinearPriorResidual::Evaluate(double const* const* parameters, double* resi
                                    double** jacobians) const {
   const int blocks = static_cast<int>(mean_.size()) / 3;
   Eigen::VectorXd bar(mean_.size());
-  for (int i = 0; i < blocks; ++i) bar.segment<3>(3 * i) = Eigen::Map<const Eigen::Vector3d>(parameters[i]);
+  for (int i = 0; i < blocks; ++i)
+    bar.segment<3>(3 * i) = Eigen::Map<const Eigen::Vector3d>(parameters[i]);
   Eigen::Map<Eigen::VectorXd> r(residuals, a_.rows());
   r = a_ * (bar - mean_);
   if (jacobians != nullptr) {
     using Block = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
     for (int i = 0; i < blocks; ++i) {
-      if (jacobians[i] != nullptr) Eigen::Map<Block>(jacobians[i], a_.rows(), 3) = a_.middleCols<3>(3 * i);
+      if (jacobians[i] != nullptr)
+        Eigen::Map<Block>(jacobians[i], a_.rows(), 3) = a_.middleCols<3>(3 * i);
     }
   }
   return true;

@@ -1,11 +1,11 @@
 // Each residual: analytic Jacobian against numeric differentiation (ceres::GradientChecker),
 // zero at the true pose, and growing as the pose moves away from it.
+#include <ceres/gradient_checker.h>
+#include <gtest/gtest.h>
+
 #include <functional>
 #include <memory>
 #include <random>
-
-#include <ceres/gradient_checker.h>
-#include <gtest/gtest.h>
 
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/orientation_residual.h"
@@ -41,12 +41,14 @@ double SquaredNorm(const ceres::CostFunction& f, const BlocksOf& blocks, Eigen::
   return r.squaredNorm();
 }
 
-void ExpectJacobianCorrect(const ceres::CostFunction& f, const BlocksOf& blocks, Eigen::VectorXd theta) {
+void ExpectJacobianCorrect(const ceres::CostFunction& f, const BlocksOf& blocks,
+                           Eigen::VectorXd theta) {
   ceres::NumericDiffOptions numeric;
   const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
   ceres::GradientChecker checker(&f, no_manifolds, numeric);
   ceres::GradientChecker::ProbeResults results;
-  EXPECT_TRUE(checker.Probe(blocks(&theta).data(), kJacobianRelativePrecision, &results)) << results.error_log;
+  EXPECT_TRUE(checker.Probe(blocks(&theta).data(), kJacobianRelativePrecision, &results))
+      << results.error_log;
 }
 
 // Zero at theta_true, and strictly growing along a fixed perturbation direction.
@@ -56,7 +58,8 @@ void ExpectZeroAtTruthAndGrowing(const ceres::CostFunction& f, const BlocksOf& b
   double previous = 0.0;
   for (double deg : {1.0, 3.0, 10.0}) {
     std::mt19937 same = *rng;  // same axes at every magnitude
-    const Eigen::VectorXd away = testing::Perturb(theta_true, deg * M_PI / 180.0, 0.01 * deg, &same);
+    const Eigen::VectorXd away =
+        testing::Perturb(theta_true, deg * M_PI / 180.0, 0.01 * deg, &same);
     const double e = SquaredNorm(f, blocks, away);
     EXPECT_GT(e, previous) << deg << " degrees";
     previous = e;
@@ -82,7 +85,8 @@ TEST_F(ResidualsTest, Orientation) {
   for (const ImuSite& site : scene_.imus) {
     const Eigen::Matrix3d measured = pose_.rotation[site.bone] * site.mount;
     OrientationResidual f(fk_.get(), site, measured, 100.0);
-    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone), testing::Perturb(truth_, 0.2, 0.1, &rng_));
+    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.2, 0.1, &rng_));
     ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
   }
 }
@@ -92,9 +96,11 @@ TEST_F(ResidualsTest, PositionWithConfidenceWeighting) {
   int checked = 0;
   for (const Site& site : scene_.layout.sites) {
     Eigen::Vector2d px;
-    if (!cam.Project(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset, &px)) continue;
+    if (!cam.Project(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset, &px))
+      continue;
     PositionResidual f(fk_.get(), &cam, site, px, 0.8, 0.04);
-    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone), testing::Perturb(truth_, 0.1, 0.05, &rng_));
+    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.1, 0.05, &rng_));
     ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
     ++checked;
   }
@@ -102,7 +108,8 @@ TEST_F(ResidualsTest, PositionWithConfidenceWeighting) {
   // The residual scales with sqrt(lambda * c).
   const Site& site = scene_.layout.sites[0];
   Eigen::Vector2d px;
-  ASSERT_TRUE(cam.Project(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset, &px));
+  ASSERT_TRUE(
+      cam.Project(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset, &px));
   PositionResidual full(fk_.get(), &cam, site, px + Eigen::Vector2d(3, 4), 1.0, 1.0);
   PositionResidual quarter(fk_.get(), &cam, site, px + Eigen::Vector2d(3, 4), 0.5, 0.5);
   EXPECT_NEAR(SquaredNorm(full, ChainOf(scene_.skeleton, site.bone), truth_), 25.0, 1e-6);
@@ -117,11 +124,14 @@ TEST_F(ResidualsTest, AccelerationMatchesTheSecondDifference) {
   ForwardKinematics(scene_.skeleton, theta1.data(), &p1);
   const double h1 = 1.0 / 60.0, h2 = 1.1 / 60.0;  // jittered steps
   for (const ImuSite& site : scene_.imus) {
-    auto at = [&](const BodyPose& p) { return Eigen::Vector3d(p.position[site.bone] + p.rotation[site.bone] * site.offset); };
+    auto at = [&](const BodyPose& p) {
+      return Eigen::Vector3d(p.position[site.bone] + p.rotation[site.bone] * site.offset);
+    };
     const Eigen::Vector3d x0 = at(p0), x1 = at(p1), x2 = at(pose_);
     const Eigen::Vector3d expected = 2.0 * ((x2 - x1) / h2 - (x1 - x0) / h1) / (h1 + h2);
     AccelerationResidual f(fk_.get(), site, x1, x0, h1, h2, expected, 0.1);
-    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone), testing::Perturb(truth_, 0.1, 0.05, &rng_));
+    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.1, 0.05, &rng_));
     ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
   }
   // Uniform steps reduce to the slide's (x2 - 2 x1 + x0) / dt^2.
@@ -134,7 +144,8 @@ TEST_F(ResidualsTest, AccelerationMatchesTheSecondDifference) {
   const double dt = 0.01;
   AccelerationResidual uniform(fk_.get(), site, x1, x0, dt, dt, Eigen::Vector3d::Zero(), 1.0);
   Eigen::Vector3d r;
-  ASSERT_TRUE(uniform.Evaluate(ChainBlocks(scene_.skeleton, site.bone, theta.data()).data(), r.data(), nullptr));
+  ASSERT_TRUE(uniform.Evaluate(ChainBlocks(scene_.skeleton, site.bone, theta.data()).data(),
+                               r.data(), nullptr));
   EXPECT_LT((r - (xs - 2 * x1 + x0) / (dt * dt)).norm(), 1e-6);
 }
 
@@ -144,7 +155,8 @@ TEST_F(ResidualsTest, PcaTermsAreZeroAtTheMeanAndMatchTheirDefinition) {
   PcaDeviationResidual dev(prior, 3.0);
   EXPECT_EQ(proj.num_residuals(), 60 - 23);
   const BlocksOf joints = JointsOf(scene_.skeleton);
-  for (const ceres::CostFunction* f : std::initializer_list<const ceres::CostFunction*>{&proj, &dev}) {
+  for (const ceres::CostFunction* f :
+       std::initializer_list<const ceres::CostFunction*>{&proj, &dev}) {
     ExpectJacobianCorrect(*f, joints, testing::Perturb(truth_, 0.2, 0.1, &rng_));
     ExpectZeroAtTruthAndGrowing(*f, joints, truth_, &rng_);
   }
@@ -153,7 +165,8 @@ TEST_F(ResidualsTest, PcaTermsAreZeroAtTheMeanAndMatchTheirDefinition) {
   const Eigen::VectorXd v = theta.tail(60) - prior.mean;
   const Eigen::MatrixXd m = prior.basis;
   const double e_pp = 2.0 * (v - m * m.transpose() * v).squaredNorm();
-  const double e_pd = 3.0 * (prior.sigma.cwiseInverse().asDiagonal() * m.transpose() * v).squaredNorm();
+  const double e_pd =
+      3.0 * (prior.sigma.cwiseInverse().asDiagonal() * m.transpose() * v).squaredNorm();
   EXPECT_NEAR(SquaredNorm(proj, joints, theta), e_pp, 1e-9 * e_pp);
   EXPECT_NEAR(SquaredNorm(dev, joints, theta), e_pd, 1e-9 * e_pd);
   // A pose inside the subspace costs nothing in projection, but deviates.
