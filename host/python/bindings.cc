@@ -278,6 +278,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("accel_at_rest", &SolverOptions::accel_at_rest)
       .def_readwrite("min_confidence", &SolverOptions::min_confidence)
       .def_readwrite("predict_motion", &SolverOptions::predict_motion)
+      .def_readwrite("max_quaternion_error", &SolverOptions::max_quaternion_error)
+      .def_readwrite("max_history_gap", &SolverOptions::max_history_gap)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations)
       .def_readwrite("max_initial_iterations", &SolverOptions::max_initial_iterations)
       .def_readwrite("function_tolerance", &SolverOptions::function_tolerance)
@@ -353,6 +355,13 @@ PYBIND11_MODULE(_core, m) {
           "quaternions (M, 4) sensor->IMU reference, w first; accelerations (M, 3) m/s^2 in the "
           "sensor frame with gravity. NaN marks a missing reading.")
       .def("reset", &Solver::Reset)
+      .def_property(
+          "options", [](const Solver& s) { return SolverOptions(s.options()); },  // a copy
+          [](Solver& s, const SolverOptions& o) {
+            std::string e;
+            if (!s.SetOptions(o, &e)) throw std::invalid_argument(e);
+          },
+          "Replace the options from the next frame on (ValueError when out of range).")
       .def("set_warm_start", &Solver::SetWarmStart)
       .def_property_readonly("pose", &Solver::pose)
       .def_property_readonly("initialised", &Solver::initialised);

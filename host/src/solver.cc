@@ -134,6 +134,12 @@ void Solver::Reset() {
   last_accel_.assign(imus_.size(), std::nullopt);
 }
 
+bool Solver::SetOptions(const SolverOptions& options, std::string* error) {
+  if (!options.IsValid(error)) return false;
+  options_ = options;
+  return true;
+}
+
 void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
   if (theta.size() != skeleton_.pose_dim() || !theta.allFinite()) return;
   theta_ = theta;

@@ -246,6 +246,9 @@ TEST(Solver, RejectsInconsistentConfiguration) {
   EXPECT_EQ(Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, std::nullopt, bad,
                            &error),
             nullptr);
+  auto solver = MakeSolver(scene, std::nullopt, SolverOptions());
+  EXPECT_FALSE(solver->SetOptions(bad, &error));
+  EXPECT_EQ(solver->options().position.weight, SolverOptions().position.weight);
 }
 
 }  // namespace

@@ -83,7 +83,9 @@ class Solver {
   const KeypointLayout& layout() const { return layout_; }
   const std::vector<ImuSite>& imus() const { return imus_; }
   const SolverOptions& options() const { return options_; }
-  SolverOptions* mutable_options() { return &options_; }
+  // Replaces the options (weights, losses, tolerances) from the next frame on; false and
+  // *error set, options unchanged, when they are out of range.
+  bool SetOptions(const SolverOptions& options, std::string* error);
 
  private:
   struct SolvedFrame {

@@ -62,3 +62,16 @@ def test_solver_counts_and_drops_bad_input(skeleton):
     assert np.isfinite(result.theta).all()
     with pytest.raises(ValueError, match="keypoints must be"):
         solver.solve(1.0, [0], np.zeros((2, 17, 3)), [], np.zeros((0, 4)), np.zeros((0, 3)))
+
+
+def test_options_are_validated_when_replaced(skeleton):
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "coco17.json"), skeleton)
+    solver = _core.Solver(skeleton, studio.ring_rig(2), layout, [])
+    options = solver.options
+    options.max_iterations = 0
+    with pytest.raises(ValueError, match="out of range"):
+        solver.options = options
+    assert solver.options.max_iterations == _core.SolverOptions().max_iterations
+    options.max_iterations = 4
+    solver.options = options
+    assert solver.options.max_iterations == 4
