@@ -13,6 +13,7 @@ from mocap.errors import DataMissingError, MocapError
 def _bench(args: argparse.Namespace) -> int:
     from mocap import bench
 
+    bench.pin_to_one_core()
     if "solver" in args.only:
         try:
             result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats,
