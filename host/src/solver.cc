@@ -5,11 +5,9 @@
 #include <chrono>
 #include <cmath>
 
+#include "frame_problem.h"
 #include "mocap/initialisation.h"
-#include "mocap/residuals/acceleration_residual.h"
-#include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
-#include "mocap/residuals/position_residual.h"
 #include "mocap/so3.h"
 
 namespace mocap {
@@ -41,16 +39,20 @@ bool TermIsValid(const TermOptions& t, const char* name, std::string* error) {
   return true;
 }
 
-ceres::LossFunction* MakeLoss(const TermOptions& t) {
-  switch (t.loss) {
-    case LossType::kCauchy:
-      return new ceres::CauchyLoss(t.loss_scale);
-    case LossType::kHuber:
-      return new ceres::HuberLoss(t.loss_scale);
-    case LossType::kTrivial:
-      return nullptr;
-  }
-  return nullptr;
+// Levenberg-Marquardt on the dense normal equations: for ~70 parameters and ~700 residuals
+// this beats the sparse solvers, whose symbolic set-up is redone every frame
+// (docs/performance.md).
+ceres::Solver::Options CeresOptions(const SolverOptions& options, int max_iterations) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  so.dense_linear_algebra_library_type = ceres::LAPACK;
+  so.max_num_iterations = max_iterations;
+  so.function_tolerance = options.function_tolerance;
+  so.gradient_tolerance = options.gradient_tolerance;
+  so.parameter_tolerance = options.parameter_tolerance;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  return so;
 }
 
 bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
@@ -252,49 +254,13 @@ void Solver::UpdatePriorResiduals() {
 
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       Eigen::VectorXd* x, SolveResult* result) const {
-  TermOptions position_term = options_.position;
-  position_term.loss_scale *= position_loss_boost;
-  KinematicsCache fk(&skeleton_);
-  BodyPose start_pose;
-  ForwardKinematics(skeleton_, x->data(), &start_pose);
-  // The problem borrows every cost and loss function: the per-frame ones are owned here,
-  // the prior terms (constant matrices) by the solver across frames.
-  std::vector<std::unique_ptr<ceres::CostFunction>> owned;
-  auto own = [&owned](ceres::CostFunction* f) { return owned.emplace_back(f).get(); };
-  const std::unique_ptr<ceres::LossFunction> orientation_loss(MakeLoss(options_.orientation));
-  const std::unique_ptr<ceres::LossFunction> position_loss(MakeLoss(position_term));
-  const std::unique_ptr<ceres::LossFunction> acceleration_loss(MakeLoss(options_.acceleration));
-  const std::unique_ptr<ceres::LossFunction> projection_loss(MakeLoss(options_.pca_projection));
-  const std::unique_ptr<ceres::LossFunction> deviation_loss(MakeLoss(options_.pca_deviation));
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.disable_all_safety_checks = true;
-  ceres::Problem problem(problem_options);
-  for (int b = 0; b < skeleton_.num_bones(); ++b) {
-    problem.AddParameterBlock(x->data() + BlockOffset(b), BlockSize(b));
-  }
-  std::vector<ceres::ResidualBlockId> blocks[5];  // R, P, A, PP, PD
-
+  FrameProblem problem(skeleton_, x->data());
   if (Active(options_.position)) {
-    for (const Detection& d : frame.detections) {
-      const Site& site = layout_.sites[d.keypoint];
-      const Camera& cam = rig_.cameras[d.camera];
-      Eigen::Vector2d pixel;
-      if (!cam.Project(
-              start_pose.position[site.bone] + start_pose.rotation[site.bone] * site.offset,
-              &pixel)) {
-        ++result->counts.keypoints_behind_camera;
-        continue;
-      }
-      blocks[1].push_back(problem.AddResidualBlock(
-          own(new PositionResidual(&fk, &cam, site, d.pixel, d.confidence,
-                                   options_.position.weight)),
-          position_loss.get(), ChainBlocks(skeleton_, site.bone, x->data())));
-    }
+    TermOptions position = options_.position;
+    position.loss_scale *= position_loss_boost;
+    result->counts.keypoints_behind_camera +=
+        problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
-  result->counts.keypoints_used = static_cast<int>(blocks[1].size());
-
   const bool have_history = history_.size() == 2;
   const double h2 = have_history ? frame.timestamp - history_[1].timestamp : 0.0;
   const double h1 = have_history ? history_[1].timestamp - history_[0].timestamp : 0.0;
@@ -302,56 +268,35 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
                            h2 <= options_.max_history_gap;
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (frame.imu_world[i] && Active(options_.orientation)) {
-      blocks[0].push_back(problem.AddResidualBlock(
-          own(new OrientationResidual(&fk, imus_[i], *frame.imu_world[i],
-                                      options_.orientation.weight)),
-          orientation_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+      problem.AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
     }
     if (accel_ready && last_accel_[i] && Active(options_.acceleration)) {
-      blocks[2].push_back(problem.AddResidualBlock(
-          own(new AccelerationResidual(&fk, imus_[i], history_[1].imu_sites[i],
-                                       history_[0].imu_sites[i], h1, h2, *last_accel_[i],
-                                       options_.acceleration.weight)),
-          acceleration_loss.get(), ChainBlocks(skeleton_, imus_[i].bone, x->data())));
+      problem.AddAccelerationTerm(imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i], h1,
+                                  h2, *last_accel_[i], options_.acceleration);
     }
   }
-  result->counts.orientations_used = static_cast<int>(blocks[0].size());
-  result->counts.accelerations_used = static_cast<int>(blocks[2].size());
-
-  std::vector<double*> joint_blocks;
-  for (int b = 1; b < skeleton_.num_bones(); ++b)
-    joint_blocks.push_back(x->data() + BlockOffset(b));
   if (pca_projection_ && Active(options_.pca_projection)) {
-    blocks[3].push_back(
-        problem.AddResidualBlock(pca_projection_.get(), projection_loss.get(), joint_blocks));
+    problem.AddPriorTerm(kPcaProjectionTerm, pca_projection_.get(), options_.pca_projection);
   }
   if (pca_deviation_ && Active(options_.pca_deviation)) {
-    blocks[4].push_back(
-        problem.AddResidualBlock(pca_deviation_.get(), deviation_loss.get(), joint_blocks));
+    problem.AddPriorTerm(kPcaDeviationTerm, pca_deviation_.get(), options_.pca_deviation);
   }
-  if (blocks[0].empty() && blocks[1].empty()) {
+  result->counts.keypoints_used = problem.count(kPositionTerm);
+  result->counts.orientations_used = problem.count(kOrientationTerm);
+  result->counts.accelerations_used = problem.count(kAccelerationTerm);
+  if (problem.count(kPositionTerm) == 0 && problem.count(kOrientationTerm) == 0) {
     result->status = SolveStatus::kNoObservations;
     result->message = "every detection was behind its camera or a term is off";
     return false;
   }
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  so.dense_linear_algebra_library_type = ceres::LAPACK;
-  so.max_num_iterations = max_iterations;
-  so.function_tolerance = options_.function_tolerance;
-  so.gradient_tolerance = options_.gradient_tolerance;
-  so.parameter_tolerance = options_.parameter_tolerance;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  problem.Solve(CeresOptions(options_, max_iterations), &summary);
   result->iterations = static_cast<int>(summary.iterations.size()) - 1;
   result->timings = {1e3 * summary.total_time_in_seconds,
                      1e3 * summary.linear_solver_time_in_seconds,
                      1e3 * summary.jacobian_evaluation_time_in_seconds,
                      1e3 * summary.residual_evaluation_time_in_seconds};
-
   if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
       !x->allFinite()) {
     result->status = SolveStatus::kFailed;
@@ -359,20 +304,9 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     return false;
   }
   if (summary.termination_type == ceres::NO_CONVERGENCE) result->flags |= kIterationLimit;
-  if (blocks[1].empty()) result->flags |= kPositionUnconstrained;
+  if (problem.count(kPositionTerm) == 0) result->flags |= kPositionUnconstrained;
   if (!accel_ready) result->flags |= kAccelerationUnavailable;
-
-  double* costs[5] = {&result->costs.orientation, &result->costs.position,
-                      &result->costs.acceleration, &result->costs.pca_projection,
-                      &result->costs.pca_deviation};
-  for (int t = 0; t < 5; ++t) {
-    for (ceres::ResidualBlockId id : blocks[t]) {
-      double cost = 0.0;
-      problem.EvaluateResidualBlock(id, /*apply_loss_function=*/true, &cost, nullptr, nullptr);
-      *costs[t] += 2.0 * cost;  // Ceres reports rho/2
-    }
-  }
-
+  result->costs = problem.Costs();
   return true;
 }
 

@@ -1,0 +1,68 @@
+// One frame's Ceres problem: a parameter block per bone over theta, the cost terms, and
+// the cost and loss functions they use. Internal to the solver.
+#ifndef MOCAP_SRC_FRAME_PROBLEM_H_
+#define MOCAP_SRC_FRAME_PROBLEM_H_
+
+#include <ceres/ceres.h>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "mocap/camera.h"
+#include "mocap/initialisation.h"
+#include "mocap/kinematics.h"
+#include "mocap/observations.h"
+#include "mocap/sites.h"
+
+namespace mocap {
+
+struct TermOptions;
+
+enum Term {
+  kOrientationTerm,
+  kPositionTerm,
+  kAccelerationTerm,
+  kPcaProjectionTerm,
+  kPcaDeviationTerm
+};
+
+class FrameProblem {
+ public:
+  // theta must outlive the problem; Ceres updates it in place.
+  FrameProblem(const Skeleton& skeleton, double* theta);
+
+  // E_P for each detection whose site is in front of its camera at theta; returns how
+  // many were behind it (and left out).
+  int AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
+                       const std::vector<Detection>& detections, const TermOptions& options);
+  void AddOrientationTerm(const ImuSite& site, const Eigen::Matrix3d& measured_world,
+                          const TermOptions& options);
+  void AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3d& x1,
+                           const Eigen::Vector3d& x0, double h1, double h2,
+                           const Eigen::Vector3d& measured_world, const TermOptions& options);
+  // A prior term over the joint blocks; `cost` is owned by the caller and reused.
+  void AddPriorTerm(Term term, ceres::CostFunction* cost, const TermOptions& options);
+
+  int count(Term term) const { return static_cast<int>(blocks_[term].size()); }
+  void Solve(const ceres::Solver::Options& options, ceres::Solver::Summary* summary);
+  // E = sum of rho(|r|^2) of each term at the current theta.
+  TermCosts Costs();
+
+ private:
+  ceres::LossFunction* Loss(Term term, const TermOptions& options);
+  void Add(Term term, ceres::CostFunction* cost, const TermOptions& options,
+           const std::vector<double*>& blocks);
+
+  const Skeleton& skeleton_;
+  double* theta_;
+  KinematicsCache fk_;
+  ceres::Problem problem_;
+  std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
+  std::array<std::unique_ptr<ceres::LossFunction>, 5> losses_;
+  std::array<std::vector<ceres::ResidualBlockId>, 5> blocks_;
+};
+
+}  // namespace mocap
+
+#endif  // MOCAP_SRC_FRAME_PROBLEM_H_
