@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "frame_problem.h"
+#include "frame_validation.h"
 #include "mocap/initialisation.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/so3.h"
@@ -79,13 +80,6 @@ bool SolverOptions::IsValid(std::string* error) const {
   }
   return true;
 }
-
-struct Solver::CleanFrame {
-  double timestamp = 0;
-  std::vector<Detection> detections;
-  std::vector<std::optional<Eigen::Matrix3d>> imu_world;    // R_ig R_i per IMU site
-  std::vector<std::optional<Eigen::Vector3d>> accel_world;  // R_ig R_i a_i - a_g per IMU site
-};
 
 std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayout layout,
                                        std::vector<ImuSite> imus, std::optional<PosePrior> prior,
@@ -165,66 +159,6 @@ Eigen::VectorXd Solver::WarmStart(double timestamp) const {
     x.segment<3>(i) = Log(rb * Exp(s * Log(ra.transpose() * rb)));
   }
   return x;
-}
-
-Solver::CleanFrame Solver::Validate(const FrameObservations& frame, InputCounts* counts) const {
-  CleanFrame clean;
-  clean.timestamp = frame.timestamp;
-  clean.imu_world.assign(imus_.size(), std::nullopt);
-  clean.accel_world.assign(imus_.size(), std::nullopt);
-  std::vector<bool> camera_seen(rig_.cameras.size(), false);
-  for (const CameraObservation& obs : frame.cameras) {
-    if (obs.camera < 0 || obs.camera >= static_cast<int>(rig_.cameras.size()) ||
-        camera_seen[obs.camera] || static_cast<int>(obs.keypoints.size()) != layout_.size()) {
-      ++counts->unknown_sources;
-      continue;
-    }
-    camera_seen[obs.camera] = true;
-    const Camera& cam = rig_.cameras[obs.camera];
-    for (int k = 0; k < layout_.size(); ++k) {
-      const Keypoint2D& kp = obs.keypoints[k];
-      const bool finite =
-          std::isfinite(kp.x) && std::isfinite(kp.y) && std::isfinite(kp.confidence);
-      const bool plausible = finite && kp.confidence >= 0.0 && kp.confidence <= 1.0 + 1e-9 &&
-                             kp.x > -cam.width && kp.x < 2.0 * cam.width && kp.y > -cam.height &&
-                             kp.y < 2.0 * cam.height;
-      if (!plausible) {
-        ++counts->keypoints_invalid;
-      } else if (kp.confidence <= options_.min_confidence) {
-        ++counts->keypoints_not_detected;
-      } else {
-        clean.detections.push_back({obs.camera, k, {kp.x, kp.y}, std::min(kp.confidence, 1.0)});
-      }
-    }
-  }
-  std::vector<bool> imu_seen(imus_.size(), false);
-  for (const ImuObservation& obs : frame.imus) {
-    if (obs.imu < 0 || obs.imu >= static_cast<int>(imus_.size()) || imu_seen[obs.imu]) {
-      ++counts->unknown_sources;
-      continue;
-    }
-    imu_seen[obs.imu] = true;
-    const double qn = obs.orientation.norm();
-    const bool q_ok = obs.has_orientation && obs.orientation.coeffs().allFinite() &&
-                      std::abs(qn - 1.0) <= options_.max_quaternion_error;
-    if (obs.has_orientation && !q_ok) ++counts->orientations_invalid;
-    if (!q_ok) {
-      if (obs.has_acceleration) ++counts->accelerations_invalid;  // cannot reach world frame
-      continue;
-    }
-    const Eigen::Matrix3d world =
-        imus_[obs.imu].reference *
-        Eigen::Quaterniond(obs.orientation.coeffs() / qn).toRotationMatrix();
-    clean.imu_world[obs.imu] = world;
-    if (obs.has_acceleration) {
-      if (obs.acceleration.allFinite()) {
-        clean.accel_world[obs.imu] = world * obs.acceleration - options_.accel_at_rest;
-      } else {
-        ++counts->accelerations_invalid;
-      }
-    }
-  }
-  return clean;
 }
 
 void Solver::Remember(const CleanFrame& frame) {
@@ -328,7 +262,7 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     return finish(SolveStatus::kRejectedFrame,
                   "timestamp not finite or not after the previous frame");
   }
-  const CleanFrame clean = Validate(frame, &result.counts);
+  const CleanFrame clean = ValidateFrame(frame, rig_, layout_, imus_, options_, &result.counts);
   int orientations = 0;
   for (const auto& o : clean.imu_world) orientations += o.has_value();
   if (clean.detections.empty() && orientations == 0) {

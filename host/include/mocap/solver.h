@@ -21,6 +21,8 @@
 
 namespace mocap {
 
+struct CleanFrame;  // src/frame_validation.h
+
 enum class LossType { kTrivial, kCauchy, kHuber };
 
 // One cost term: E = rho(weight * |e|^2), rho scaled by loss_scale (rho(s) = a log(1 + s/a)
@@ -93,10 +95,8 @@ class Solver {
     Eigen::VectorXd theta;
     std::vector<Eigen::Vector3d> imu_sites;  // world positions of each IMU site
   };
-  struct CleanFrame;
 
   Solver() = default;
-  CleanFrame Validate(const FrameObservations& frame, InputCounts* counts) const;
   void Remember(const CleanFrame& frame);
   // (Re)builds the prior terms' constant matrices when their weights changed.
   void UpdatePriorResiduals();
