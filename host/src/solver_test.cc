@@ -232,6 +232,39 @@ TEST(Solver, CameraBehindTheSubjectIsCountedAndSkipped) {
   EXPECT_LT(testing::MaxSiteError(scene, r.theta, truth), kMaxJointError);
 }
 
+// E_A needs the two previous frames within max_history_gap; after a gap it waits for two
+// new frames, and Reset forgets the motion entirely.
+TEST(Solver, AccelerationTermFollowsTheHistory) {
+  const testing::Scene scene = testing::MakeScene(2);
+  std::mt19937 rng(13);
+  const Eigen::VectorXd pose = testing::RandomPose(scene.skeleton, &rng, 0.2);
+  auto solver = MakeSolver(scene, std::nullopt, SolverOptions());
+  auto frame = [&](double t) {
+    FrameObservations f = testing::Render(scene, pose, t);
+    for (ImuObservation& o : f.imus) {  // at rest: the accelerometer reads gravity's reaction
+      o.has_acceleration = true;
+      o.acceleration =
+          (scene.imus[o.imu].reference * o.orientation.toRotationMatrix()).transpose() *
+          solver->options().accel_at_rest;
+    }
+    return solver->Solve(f);
+  };
+  EXPECT_EQ(frame(0.0).counts.accelerations_used, 0);
+  EXPECT_EQ(frame(0.02).counts.accelerations_used, 0);
+  SolveResult r = frame(0.04);
+  EXPECT_EQ(r.counts.accelerations_used, 13);
+  EXPECT_LT(r.costs.acceleration, 1e-6);  // at rest, the solution does not move
+  r = frame(1.0);                         // a gap longer than max_history_gap
+  EXPECT_EQ(r.counts.accelerations_used, 0);
+  EXPECT_TRUE(r.flags & kAccelerationUnavailable);
+  EXPECT_EQ(frame(1.02).counts.accelerations_used, 0);
+  EXPECT_EQ(frame(1.04).counts.accelerations_used, 13);
+  solver->Reset();
+  r = frame(2.0);
+  EXPECT_EQ(r.status, SolveStatus::kInitialised);
+  EXPECT_EQ(r.counts.accelerations_used, 0);
+}
+
 TEST(Solver, RejectsInconsistentConfiguration) {
   const testing::Scene scene = testing::MakeScene(2);
   std::string error;
