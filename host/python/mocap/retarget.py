@@ -11,19 +11,26 @@ facing +x, so v_solver = P v_bvh with P the cyclic permutation below.
 Units: `scale` converts file units to metres; "auto" picks the common unit (m, cm,
 inch, CMU's 0.056444) that gives an adult's rest height.
 
-Bone offsets are the BVH rest-pose differences between mapped joints, so the solver's
-rest pose is the file's rest pose and each bone's world orientation is its joint's. An
-intermediate joint that is skipped (e.g. "LHipJoint") folds into its parent: positions
+Rest poses differ between files (legs splayed or straight, T- or A-pose), so rotations
+are re-expressed against one canonical rest pose, that of the default skeleton
+(host/data/skeleton_default.json): each bone gets a constant correction C_b, the rotation
+that best turns its canonical child offsets onto the file's rest child offsets (Kabsch
+over its children; the minimal rotation with one child; the parent's with none). Then
+  G_b = P R_b P^T C_b  (world orientation),   t_c = C_parent^T (P o_c)  (offsets),
+so joint positions are exactly the file's and a zero pose is the canonical T-pose.
+An intermediate joint that is skipped (e.g. "LHipJoint") folds into its parent: positions
 then differ slightly from the file's where that joint rotates.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import json
 
 import numpy as np
 
-from mocap import rotations
+from mocap import paths, rotations
 from mocap.bvh import Motion
 from mocap.errors import InputError
 
@@ -70,8 +77,52 @@ REST_HEIGHT = 1.53  # metres: head joint to toes of an adult (default skeleton)
 class Mapping:
     joint: list[int | None]  # per solver bone: BVH joint index, or None (End Site of parent)
     scale: float  # file units -> metres
-    offsets: np.ndarray  # (21, 3) solver bone offsets, metres
+    offsets: np.ndarray  # (21, 3) solver bone offsets in the canonical bone frames, metres
     parents: list[int]
+    corrections: np.ndarray  # (21, 3, 3) C_b: canonical bone frame -> the file's rest frame
+
+
+@functools.cache
+def canonical_offsets() -> np.ndarray:
+    """(21, 3) offsets of the default skeleton, whose rest pose is the canonical one."""
+    bones = json.loads(paths.DEFAULT_SKELETON.read_text())["bones"]
+    by_name = {b["name"]: np.asarray(b["offset"], dtype=float) for b in bones}
+    return np.array([by_name[b] for b in BONES])
+
+
+def _minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation turning direction a onto direction b."""
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    s, c = np.linalg.norm(axis), float(np.dot(a, b))
+    if s < 1e-12:
+        if c > 0:
+            return np.eye(3)
+        perp = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+        return rotations.exp(np.pi * perp / np.linalg.norm(perp))
+    return rotations.exp(axis / s * np.arctan2(s, c))
+
+
+def _align(canonical: np.ndarray, source: np.ndarray) -> np.ndarray:
+    """Rotation R with R canonical_i ~ source_i (rows), Kabsch; minimal when rank 1."""
+    keep = (np.linalg.norm(canonical, axis=1) > 1e-9) & (np.linalg.norm(source, axis=1) > 1e-9)
+    a, b = canonical[keep], source[keep]
+    if len(a) == 0:
+        return np.eye(3)
+    u, sv, vt = np.linalg.svd(b.T @ a)
+    if len(a) == 1 or sv[1] < 1e-6 * sv[0]:
+        return _minimal_rotation(a[np.argmax(np.linalg.norm(a, axis=1))], b[np.argmax(np.linalg.norm(a, axis=1))])
+    d = np.sign(np.linalg.det(u @ vt))
+    return u @ np.diag([1.0, 1.0, d]) @ vt
+
+
+def _corrections(source: np.ndarray, parents: list[int]) -> np.ndarray:
+    canonical = canonical_offsets()
+    out = np.empty((len(BONES), 3, 3))
+    for b in range(len(BONES)):
+        kids = [c for c in range(len(BONES)) if parents[c] == b]
+        out[b] = _align(canonical[kids], source[kids]) if kids else out[parents[b]]
+    return out
 
 
 def _descends(motion: Motion, j: int, ancestor: int) -> bool:
@@ -118,7 +169,10 @@ def map_joints(motion: Motion, scale: float | str = "auto") -> Mapping:
             heights.append(pos[:, 2].max() - pos[:, 2].min())
         scale = UNIT_CANDIDATES[int(np.argmin([abs(h - REST_HEIGHT) for h in heights]))]
     parents = [BONES.index(PARENTS[b]) if PARENTS[b] else -1 for b in BONES]
-    return Mapping([joint[b] for b in BONES], float(scale), raw * float(scale), parents)
+    source = raw * float(scale)
+    corrections = _corrections(source, parents)
+    offsets = np.array([corrections[parents[b]].T @ source[b] if b else source[b] for b in range(len(BONES))])
+    return Mapping([joint[b] for b in BONES], float(scale), offsets, parents, corrections)
 
 
 def _rest_positions(offsets: np.ndarray) -> np.ndarray:
@@ -133,9 +187,10 @@ def poses(motion: Motion, mapping: Mapping) -> np.ndarray:
     """(frames, 66) solver pose vectors of every frame of the clip."""
     rot, pos = motion.global_transforms()
     n = motion.num_frames
-    world = np.empty((n, len(BONES), 3, 3))
+    source = np.empty((n, len(BONES), 3, 3))  # the file's joint orientations, solver axes
     for b, j in enumerate(mapping.joint):
-        world[:, b] = P @ rot[:, j] @ P.T if j is not None else world[:, mapping.parents[b]]
+        source[:, b] = P @ rot[:, j] @ P.T if j is not None else source[:, mapping.parents[b]]
+    world = source @ mapping.corrections  # canonical bone orientations
     theta = np.zeros((n, 3 + 3 * len(BONES)))
     theta[:, 0:3] = (pos[:, mapping.joint[0]] @ P.T) * mapping.scale - mapping.offsets[0]
     theta[:, 3:6] = rotations.log(world[:, 0])

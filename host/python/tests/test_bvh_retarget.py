@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mocap import _core, bvh, retarget
+from mocap import _core, bvh, retarget, rotations
 from mocap.errors import InputError
 
 # A small MotionBuilder-style clip: y up, left +x, facing +z, centimetres.
@@ -60,9 +60,11 @@ def test_correspondence_units_and_axes():
     assert names[retarget.BONES.index("clavicle_l")] == "LeftShoulder"
     assert names[retarget.BONES.index("upper_arm_l")] == "LeftArm"
     assert names[retarget.BONES.index("toes_l")] is None  # sits at the foot's End Site
-    # BVH left (+x) becomes solver left (+y); BVH forward (+z) becomes solver +x.
-    np.testing.assert_allclose(mapping.offsets[retarget.BONES.index("thigh_l")], [0, 0.09, -0.02], atol=1e-12)
+    # BVH left (+x) becomes solver left (+y); BVH forward (+z) becomes solver +x. This
+    # clip's legs are straight as the canonical rest pose's, so their offsets are kept.
+    np.testing.assert_allclose(mapping.offsets[retarget.BONES.index("shin_l")], [0, 0, -0.42], atol=1e-12)
     np.testing.assert_allclose(mapping.offsets[retarget.BONES.index("toes_l")], [0.14, 0, -0.06], atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(mapping.offsets[retarget.BONES.index("thigh_l")]), np.hypot(0.09, 0.02))
 
 
 def test_poses_reproduce_the_clips_joint_positions():
@@ -80,7 +82,27 @@ def test_poses_reproduce_the_clips_joint_positions():
             if j is None:
                 continue
             np.testing.assert_allclose(p_solver[b], retarget.P @ pos[f, j] * 0.01, atol=1e-9)
-            np.testing.assert_allclose(r_solver[b], retarget.P @ rot[f, j] @ retarget.P.T, atol=1e-9)
+            expected = retarget.P @ rot[f, j] @ retarget.P.T @ mapping.corrections[b]
+            np.testing.assert_allclose(r_solver[b], expected, atol=1e-9)
+
+
+def test_rest_poses_are_re_expressed_against_the_canonical_t_pose():
+    # The same hierarchy with arms hanging 45 degrees down (an A-pose rest): at zero
+    # channels the upper arm's world orientation must be the canonical one (arm along +y)
+    # turned 45 degrees down; the T-pose rest leaves it as it is.
+    a_pose = CLIP.replace("OFFSET 28 0 0", "OFFSET 19.79899 -19.79899 0").replace(
+        "OFFSET 26 0 0", "OFFSET 18.38478 -18.38478 0").replace("OFFSET 10 0 0", "OFFSET 7.07107 -7.07107 0")
+    arm = retarget.BONES.index("upper_arm_l")
+    for text, expected_deg in ((CLIP, 0.0), (a_pose, 45.0)):
+        motion = bvh.parse(text + "\n".join(" ".join(["0"] * WIDTH) for _ in range(2)) + "\n")
+        mapping = retarget.map_joints(motion)
+        skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+        rot, _ = skeleton.forward_kinematics(retarget.poses(motion, mapping)[0])
+        w = rotations.log(rot[arm])
+        assert np.degrees(np.linalg.norm(w)) == pytest.approx(expected_deg, abs=1e-6)
+        if expected_deg:
+            # +y turned down towards -z: a rotation about -x
+            np.testing.assert_allclose(w / np.linalg.norm(w), [-1.0, 0.0, 0.0], atol=1e-9)
 
 
 def test_malformed_files_raise_input_errors():
