@@ -7,6 +7,7 @@ import json
 import logging
 import sys
 
+from mocap import paths
 from mocap.errors import DataMissingError, MocapError
 
 
@@ -46,6 +47,19 @@ def _rig(args: argparse.Namespace) -> int:
     return 0
 
 
+def _train_prior(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap import prior
+
+    exclude = set() if args.include_test else prior.test_clips(Path(args.split))
+    result, info = prior.train(Path(args.bvh), rate=args.rate, exclude=exclude, variance=args.variance,
+                               clusters=args.clusters or None, seed=args.seed)
+    prior.save(result, Path(args.out), info)
+    logging.info("wrote %s: %d clips, %d frames, rank %d", args.out, len(info["clips"]), info["frames"], info["rank"])
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap", description="Real-time motion capture from video and IMUs.")
     p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
@@ -65,6 +79,18 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--scale", default="auto", help="file units to metres, or 'auto' (default)")
     s.add_argument("--out", required=True, help="skeleton JSON to write")
     s.set_defaults(func=_skeleton)
+
+    t = sub.add_parser("train-prior", help="fit the PCA pose prior to a folder of BVH clips")
+    t.add_argument("--bvh", required=True, help="folder of BVH files (searched recursively)")
+    t.add_argument("--out", required=True, help="prior JSON to write")
+    t.add_argument("--split", default=str(paths.HOST_DATA / "motion_split.json"),
+                   help="split file whose 'test' clips are left out (default: the shipped one)")
+    t.add_argument("--include-test", action="store_true", help="train on the test clips too")
+    t.add_argument("--rate", type=float, default=60.0, help="resample clips to this rate, Hz (default 60)")
+    t.add_argument("--clusters", type=int, default=500, help="k-means clusters, 0 for none (default 500)")
+    t.add_argument("--variance", type=float, default=0.95, help="fraction of variance kept (default 0.95)")
+    t.add_argument("--seed", type=int, default=0, help="k-means seed (default 0)")
+    t.set_defaults(func=_train_prior)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
     r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")

@@ -75,3 +75,20 @@ def test_options_are_validated_when_replaced(skeleton):
     options.max_iterations = 4
     solver.options = options
     assert solver.options.max_iterations == 4
+
+
+def test_python_solver_uses_the_shipped_prior_unless_told_not_to(skeleton):
+    from mocap.solver import Solver
+
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "coco17.json"), skeleton)
+    rig = studio.ring_rig(4)
+    theta = np.zeros(skeleton.pose_dim)
+    theta[2] = 0.95
+    theta[6:] = 0.3  # far from the prior's mean
+    kp = studio.keypoints(rig, studio.site_positions(skeleton, layout.bones, layout.offsets, theta))
+    costs = []
+    for solver in (Solver(skeleton, rig, layout, []), Solver(skeleton, rig, layout, [], prior_model=None)):
+        solver.set_warm_start(theta)
+        costs.append(solver.solve(0.0, list(range(4)), kp, [], np.zeros((0, 4)), np.zeros((0, 3))).costs)
+    assert costs[0]["pca_projection"] > 0 and costs[0]["pca_deviation"] > 0
+    assert costs[1]["pca_projection"] == 0 and costs[1]["pca_deviation"] == 0
