@@ -14,6 +14,7 @@ import os
 import numpy as np
 
 from mocap import _core, bvh, paths, prior, retarget, rotations, studio
+from mocap.errors import InputError
 from mocap.solver import Solver
 
 BENCH_CLIPS = ["data/mocap/cmu-131/131_01.bvh", "data/mocap/cmu-131/131_02.bvh",
@@ -95,12 +96,26 @@ def _run(skeleton, layout, imus, pose_prior, options, takes: list[Take]) -> dict
             "median_parts_ms": {k: round(float(np.median([p[k] for p in parts])), 4) for k in parts[0]}}
 
 
-def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, function_tolerance: float | None = None,
+def solver_options(settings: list[str]) -> _core.SolverOptions:
+    """SolverOptions with "name=value" or "term.field=value" settings applied."""
+    options = _core.SolverOptions()
+    for setting in settings:
+        name, _, value = setting.partition("=")
+        target, _, field = name.rpartition(".")
+        owner = getattr(options, target) if target else options
+        if not hasattr(owner, field) or not value:
+            raise InputError(f"unknown solver option or missing value: {setting!r}")
+        current = getattr(owner, field)
+        setattr(owner, field, value.lower() in ("1", "true", "on") if isinstance(current, bool) else type(current)(float(value)))
+        if target:
+            setattr(options, target, owner)  # terms are copied out and back
+    return options
+
+
+def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, settings: list[str] = (),
            frames_per_clip: int | None = None, noise: Noise = Noise()) -> dict:
     """The run with the lowest median of `repeats` (shared machines are noisy)."""
-    options = _core.SolverOptions()
-    if function_tolerance is not None:
-        options.function_tolerance = function_tolerance
+    options = solver_options(list(settings))
     rng = np.random.default_rng(seed)
     clips = [load_clip(c, rate) for c in BENCH_CLIPS]
     clips = [(m, thetas[:frames_per_clip], dt) for m, thetas, dt in clips]
@@ -117,7 +132,7 @@ def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, function_toleran
     best = min(runs, key=lambda r: r["median_ms"])
     return {"bench": "solver", "rate_hz": rate, "cameras": 8, "keypoints": len(layout), "imus": len(imus),
             "terms": 5, "prior_rank": int(pose_prior.basis.shape[1]),
-            "function_tolerance": options.function_tolerance, **best,
+            "settings": list(settings), **best,
             "medians_ms_of_repeats": [r["median_ms"] for r in runs], "cpu_affinity": sorted(os.sched_getaffinity(0))}
 
 

@@ -17,8 +17,7 @@ def _bench(args: argparse.Namespace) -> int:
     bench.pin_to_one_core()
     if "solver" in args.only:
         try:
-            result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats,
-                                  function_tolerance=args.function_tolerance)
+            result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats, settings=args.set)
             print(json.dumps(result), flush=True)
         except DataMissingError as e:
             print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
@@ -70,8 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
-    b.add_argument("--function-tolerance", type=float, default=None,
-                   help="solver's relative cost change that ends a frame (default: the solver's)")
+    b.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
+                   help="a solver option, e.g. function_tolerance=3e-2 or acceleration.weight=0 (repeatable)")
     b.set_defaults(func=_bench)
 
     s = sub.add_parser("skeleton", help="write a solver skeleton file from a BVH hierarchy")
