@@ -217,6 +217,15 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("rotation", &Camera::rotation, "world -> camera")
       .def_readwrite("translation", &Camera::translation, "world -> camera, metres")
       .def("center", &Camera::Center)
+      .def(
+          "undistort",
+          [](const Camera& c, const Eigen::MatrixX2d& pixels) {
+            Eigen::MatrixX2d out(pixels.rows(), 2);
+            for (long i = 0; i < pixels.rows(); ++i)
+              out.row(i) = c.Undistort(pixels.row(i).transpose()).transpose();
+            return out;
+          },
+          "normalised image coordinates (N, 2) of pixels (N, 2)")
       .def("project", &Project, "(pixels (N, 2), valid (N,)) for world points (N, 3)");
 
   py::class_<Rig>(m, "Rig")

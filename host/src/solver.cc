@@ -143,14 +143,19 @@ void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
   warm_start_given_ = true;
 }
 
+bool Solver::HistoryUsable(double timestamp) const {
+  if (history_.size() < 2) return false;
+  const double h1 = history_[1].timestamp - history_[0].timestamp;
+  const double h2 = timestamp - history_[1].timestamp;
+  return h1 > 0.0 && h2 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap &&
+         history_[0].position_constrained == history_[1].position_constrained;
+}
+
 Eigen::VectorXd Solver::WarmStart(double timestamp) const {
-  if (!options_.predict_motion || warm_start_given_ || history_.size() < 2) return theta_;
+  if (!options_.predict_motion || warm_start_given_ || !HistoryUsable(timestamp)) return theta_;
   const SolvedFrame& a = history_[0];
   const SolvedFrame& b = history_[1];
-  const double h1 = b.timestamp - a.timestamp, h2 = timestamp - b.timestamp;
-  if (!(h1 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap))
-    return theta_;
-  const double s = h2 / h1;
+  const double s = (timestamp - b.timestamp) / (b.timestamp - a.timestamp);
   Eigen::VectorXd x = theta_;
   x.head<3>() += s * (b.theta.head<3>() - a.theta.head<3>());
   for (int b_idx = 0; b_idx < skeleton_.num_bones(); ++b_idx) {
@@ -161,10 +166,10 @@ Eigen::VectorXd Solver::WarmStart(double timestamp) const {
   return x;
 }
 
-void Solver::Remember(const CleanFrame& frame) {
+void Solver::Remember(const CleanFrame& frame, bool position_constrained) {
   BodyPose pose;
   ForwardKinematics(skeleton_, theta_.data(), &pose);
-  SolvedFrame solved{frame.timestamp, theta_, {}};
+  SolvedFrame solved{frame.timestamp, theta_, {}, position_constrained};
   for (const ImuSite& s : imus_) {
     solved.imu_sites.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
   }
@@ -195,11 +200,9 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
-  const bool have_history = history_.size() == 2;
-  const double h2 = have_history ? frame.timestamp - history_[1].timestamp : 0.0;
-  const double h1 = have_history ? history_[1].timestamp - history_[0].timestamp : 0.0;
-  const bool accel_ready = have_history && h1 > 0.0 && h2 > 0.0 && h1 <= options_.max_history_gap &&
-                           h2 <= options_.max_history_gap;
+  const bool accel_ready = HistoryUsable(frame.timestamp);
+  const double h2 = accel_ready ? frame.timestamp - history_[1].timestamp : 0.0;
+  const double h1 = accel_ready ? history_[1].timestamp - history_[0].timestamp : 0.0;
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (frame.imu_world[i] && Active(options_.orientation)) {
       problem.AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
@@ -278,21 +281,25 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
             .theta;
   }
 
-  if (initialising) {
+  // Keypoints again after frames without them (a camera outage, HS mode): the pose has
+  // drifted and is re-acquired like a first frame.
+  const bool reacquiring = !initialising && !clean.detections.empty() && !history_.empty() &&
+                           !history_.back().position_constrained;
+  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
+  if (initialising || reacquiring) {
     // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the
     // Cauchy loss would treat their large errors as outliers.
     SolveResult coarse = result;
-    if (!Optimise(clean, options_.max_initial_iterations, kCoarseLossBoost, &x, &coarse)) {
+    if (!Optimise(clean, iterations, kCoarseLossBoost, &x, &coarse)) {
       return finish(SolveStatus::kFailed, coarse.message);
     }
   }
-  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
   if (!Optimise(clean, iterations, 1.0, &x, &result)) {
     return finish(result.status, result.message);
   }
   theta_ = x;
   initialised_ = true;
-  Remember(clean);
+  Remember(clean, !(result.flags & kPositionUnconstrained));
   return finish(initialising ? SolveStatus::kInitialised : SolveStatus::kOk, "");
 }
 

@@ -94,10 +94,16 @@ class Solver {
     double timestamp;
     Eigen::VectorXd theta;
     std::vector<Eigen::Vector3d> imu_sites;  // world positions of each IMU site
+    bool position_constrained;               // keypoints took part in the solve
   };
+  // The two previous solves, within max_history_gap of each other and of `timestamp`, in
+  // one regime (both with keypoints, or both without): across a change of regime, their
+  // difference holds the re-acquisition jump, not the motion, and extrapolating it (E_A,
+  // the warm-start prediction) runs away.
+  bool HistoryUsable(double timestamp) const;
 
   Solver() = default;
-  void Remember(const CleanFrame& frame);
+  void Remember(const CleanFrame& frame, bool position_constrained);
   // (Re)builds the prior terms' constant matrices when their weights changed.
   void UpdatePriorResiduals();
   // The warm start of a frame at `timestamp`.

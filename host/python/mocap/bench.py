@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 
-from mocap import _core, bvh, paths, prior, retarget, rotations, studio
+from mocap import _core, paths, prior, retarget, rotations, studio
 from mocap.errors import InputError
 from mocap.solver import Solver
 
@@ -28,14 +28,6 @@ class Noise:
     orientation_sigma: float = np.radians(1.0)  # rad per axis
     acceleration_sigma: float = 0.3  # m/s^2 per axis
     mount_max: float = np.radians(20.0)  # rad, sensor mounting rotations drawn up to this
-
-
-def load_clip(relative: str, rate: float):
-    motion = bvh.load(paths.shared_file(relative))
-    mapping = retarget.map_joints(motion)
-    stride = max(1, int(round(1.0 / (motion.frame_time * rate))))
-    thetas = retarget.poses(motion, mapping)[::stride]
-    return mapping, thetas, motion.frame_time * stride
 
 
 def pin_to_one_core() -> int:
@@ -117,7 +109,7 @@ def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, settings: list[s
     """The run with the lowest median of `repeats` (shared machines are noisy)."""
     options = solver_options(list(settings))
     rng = np.random.default_rng(seed)
-    clips = [load_clip(c, rate) for c in BENCH_CLIPS]
+    clips = [retarget.load_clip(paths.shared_file(c), rate) for c in BENCH_CLIPS]
     clips = [(m, thetas[:frames_per_clip], dt) for m, thetas, dt in clips]
     mapping = clips[0][0]
     skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)

@@ -59,6 +59,24 @@ def _train_prior(args: argparse.Namespace) -> int:
     return 0
 
 
+def _eval(args: argparse.Namespace) -> int:
+    import dataclasses
+    from pathlib import Path
+
+    from mocap import eval as evaluation
+    from mocap.sim import detector, take
+
+    motion = Path(args.motion)
+    clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
+    config = take.Config(preset=args.preset, cameras=args.cameras,
+                         detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
+    results = [evaluation.evaluate(clip, config, args.omit, args.seed) for clip in clips]
+    summary = evaluation.summarise(results)
+    Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
+    print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap", description="Real-time motion capture from video and IMUs.")
     p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
@@ -90,6 +108,18 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--variance", type=float, default=0.95, help="fraction of variance kept (default 0.95)")
     t.add_argument("--seed", type=int, default=0, help="k-means seed (default 0)")
     t.set_defaults(func=_train_prior)
+
+    e = sub.add_parser("eval", help="simulate takes of real motion, solve them and score the solver")
+    e.add_argument("--motion", required=True, help="BVH file or folder of BVH files (searched recursively)")
+    e.add_argument("--preset", default="hq13", choices=["hq13", "hs13", "hq6", "hs6"],
+                   help="HQ: detections every frame, 8 cameras; HS: 2 of every 8 frames, 4 cameras (default hq13)")
+    e.add_argument("--cameras", type=int, default=None, help="number of cameras (default: the preset's)")
+    e.add_argument("--omit", nargs="*", default=[], choices=["R", "P", "A", "PP", "PD"], help="cost terms to switch off")
+    e.add_argument("--site-offsets", default="on", choices=["on", "off"],
+                   help="the detector's systematic 1-3 cm site offsets (default on)")
+    e.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")
+    e.add_argument("--json", required=True, help="JSON file to write the results to")
+    e.set_defaults(func=_eval)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
     r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, bvh, paths, retarget
+from mocap import _core, paths, retarget
 from mocap.errors import InputError
 
 log = logging.getLogger(__name__)
@@ -60,20 +60,12 @@ def test_clips(split: Path = SPLIT) -> set[str]:
     return set(json.loads(split.read_text())["test"])
 
 
-def clip_poses(path: Path, rate: float) -> np.ndarray:
-    """(frames, 66) canonical poses of a BVH clip, resampled to `rate` by nearest frame."""
-    motion = bvh.load(path)
-    thetas = retarget.poses(motion, retarget.map_joints(motion))
-    t = np.arange(0.0, motion.num_frames * motion.frame_time, 1.0 / rate)
-    return thetas[np.minimum(np.round(t / motion.frame_time).astype(int), motion.num_frames - 1)]
-
-
 def train(folder: Path, rate: float = 60.0, exclude: set[str] = frozenset(), **fit_args) -> tuple[_core.PosePrior, dict]:
     """The prior of every BVH file under folder whose relative path is not excluded."""
     files = sorted(p for p in Path(folder).rglob("*.bvh") if p.relative_to(folder).as_posix() not in exclude)
     if not files:
         raise InputError(f"no training clips under {folder}")
-    poses = [clip_poses(p, rate) for p in files]
+    poses = [retarget.load_clip(p, rate)[1] for p in files]
     frames = sum(len(p) for p in poses)
     prior = fit(np.concatenate(poses), **fit_args)
     info = {"clips": [p.relative_to(folder).as_posix() for p in files], "frames": frames,

@@ -13,9 +13,12 @@ inch, CMU's 0.056444) that gives an adult's rest height.
 
 Rest poses differ between files (legs splayed or straight, T- or A-pose), so rotations
 are re-expressed against one canonical rest pose, that of the default skeleton
-(host/data/skeleton_default.json): each bone gets a constant correction C_b, the rotation
-that best turns its canonical child offsets onto the file's rest child offsets (Kabsch
-over its children; the minimal rotation with one child; the parent's with none). Then
+(host/data/skeleton_default.json): each bone gets a constant correction C_b turning its
+canonical rest frame onto the file's. Pelvis and upper spine: the left-right axis between
+their paired children (hips, clavicles) exactly, then the chain child (spine, neck) as
+well as it can (TRIAD); a bone with one child: the minimal rotation of that child's
+direction; rest vectors under 1 cm are ignored; a bone left with nothing keeps its
+parent's correction. Then
   G_b = P R_b P^T C_b  (world orientation),   t_c = C_parent^T (P o_c)  (offsets),
 so joint positions are exactly the file's and a zero pose is the canonical T-pose.
 An intermediate joint that is skipped (e.g. "LHipJoint") folds into its parent: positions
@@ -40,7 +43,7 @@ _SIDE_ALIASES = {
     "clavicle": ["{Side}Collar", "{s}Collar", "{Side}Clavicle", "{Side}Shoulder"],
     "upper_arm": ["{Side}Arm", "{Side}UpperArm", "{s}Shldr", "{Side}Shoulder"],
     "forearm": ["{Side}ForeArm", "{Side}Elbow", "{s}ForeArm", "{Side}LowerArm"],
-    "hand": ["{Side}Hand", "{Side}Wrist", "{s}Hand"],
+    "hand": ["{Side}Hand", "{s}Hand", "{Side}Wrist"],  # the distal joint: CMU "lhand", not its "LeftWrist"
     "thigh": ["{Side}UpLeg", "{Side}Thigh", "{s}Thigh", "{Side}Hip", "{Side}UpperLeg"],
     "shin": ["{Side}Leg", "{Side}Knee", "{s}Shin", "{Side}LowerLeg", "{Side}Shin"],
     "foot": ["{Side}Foot", "{Side}Ankle", "{s}Foot"],
@@ -103,25 +106,49 @@ def _minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return rotations.exp(axis / s * np.arctan2(s, c))
 
 
-def _align(canonical: np.ndarray, source: np.ndarray) -> np.ndarray:
-    """Rotation R with R canonical_i ~ source_i (rows), Kabsch; minimal when rank 1."""
-    keep = (np.linalg.norm(canonical, axis=1) > 1e-9) & (np.linalg.norm(source, axis=1) > 1e-9)
-    a, b = canonical[keep], source[keep]
-    if len(a) == 0:
-        return np.eye(3)
-    u, sv, vt = np.linalg.svd(b.T @ a)
-    if len(a) == 1 or sv[1] < 1e-6 * sv[0]:
-        return _minimal_rotation(a[np.argmax(np.linalg.norm(a, axis=1))], b[np.argmax(np.linalg.norm(a, axis=1))])
-    d = np.sign(np.linalg.det(u @ vt))
-    return u @ np.diag([1.0, 1.0, d]) @ vt
+# Bones with several children: the child that continues the chain, and the left/right pair
+# whose difference gives the lateral axis.
+CHAIN = {"pelvis": "spine_lower", "spine_upper": "neck"}
+LATERAL = {"pelvis": ("thigh_l", "thigh_r"), "spine_upper": ("clavicle_l", "clavicle_r")}
+MIN_LENGTH = 0.01  # m: shorter rest vectors (e.g. a spine joint at the hip centre) say nothing
+
+
+def _triad(a1: np.ndarray, a2: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
+    """Rotation turning a1 exactly onto b1 and a2 as close as it can onto b2."""
+    def frame(u, v):
+        e1 = u / np.linalg.norm(u)
+        e2 = np.cross(u, v)
+        e2 /= np.linalg.norm(e2)
+        return np.stack([e1, e2, np.cross(e1, e2)], axis=1)
+    return frame(b1, b2) @ frame(a1, a2).T
+
+
+def _correction(b: int, canonical: np.ndarray, source: np.ndarray, parents: list[int]) -> np.ndarray | None:
+    """C_b from the bone's children (None: keep the parent's)."""
+    name = BONES[b]
+    pairs = []  # (canonical vector, source vector), most trusted first
+    if name in LATERAL:
+        left, right = (BONES.index(n) for n in LATERAL[name])
+        pairs.append((canonical[left] - canonical[right], source[left] - source[right]))
+    kids = [c for c in range(len(BONES)) if parents[c] == b]
+    chain = BONES.index(CHAIN[name]) if name in CHAIN else (kids[0] if len(kids) == 1 else None)
+    if chain is not None:
+        pairs.append((canonical[chain], source[chain]))
+    pairs = [(a, s) for a, s in pairs if np.linalg.norm(a) > MIN_LENGTH and np.linalg.norm(s) > MIN_LENGTH]
+    if not pairs:
+        return None
+    if len(pairs) == 1:
+        return _minimal_rotation(*pairs[0])
+    (a1, b1), (a2, b2) = pairs
+    return _triad(a1, a2, b1, b2)
 
 
 def _corrections(source: np.ndarray, parents: list[int]) -> np.ndarray:
     canonical = canonical_offsets()
     out = np.empty((len(BONES), 3, 3))
     for b in range(len(BONES)):
-        kids = [c for c in range(len(BONES)) if parents[c] == b]
-        out[b] = _align(canonical[kids], source[kids]) if kids else out[parents[b]]
+        c = _correction(b, canonical, source, parents)
+        out[b] = c if c is not None else (out[parents[b]] if parents[b] >= 0 else np.eye(3))
     return out
 
 
@@ -181,6 +208,17 @@ def _rest_positions(offsets: np.ndarray) -> np.ndarray:
         parent = PARENTS[name]
         pos[b] = offsets[b] + (pos[BONES.index(parent)] if parent else 0.0)
     return pos
+
+
+def load_clip(path, rate: float) -> tuple[Mapping, np.ndarray, float]:
+    """A BVH clip as (mapping, (frames, 66) canonical poses at `rate` by nearest frame, dt)."""
+    from mocap import bvh
+
+    motion = bvh.load(path)
+    mapping = map_joints(motion)
+    thetas = poses(motion, mapping)
+    t = np.arange(0.0, motion.num_frames * motion.frame_time, 1.0 / rate)
+    return mapping, thetas[np.minimum(np.round(t / motion.frame_time).astype(int), motion.num_frames - 1)], 1.0 / rate
 
 
 def poses(motion: Motion, mapping: Mapping) -> np.ndarray:

@@ -1,0 +1,111 @@
+"""Accuracy of the fused solver on simulated takes of real motion (`mocap eval`).
+
+Metrics, as the paper plus jitter: mean joint position error (cm, the 21 bone origins,
+global, no alignment), mean bone orientation error (deg), mean joint velocity error
+(cm/s, finite differences over the frames' true times), per joint, and the per-frame
+solve time. floor_cm is the position error left when only the systematic errors act
+(site offsets and camera perturbation, no random noise), triangulated exactly: the
+mean error of the joint-centre keypoints' DLT triangulation against the true joints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap import _core, rotations, studio
+from mocap.sim import take as sim_take
+from mocap.solver import Solver
+
+TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation"}
+
+
+def solver_options(omit: list[str]) -> _core.SolverOptions:
+    options = _core.SolverOptions()
+    for term in omit:
+        t = getattr(options, TERMS[term])
+        t.enabled = False
+        setattr(options, TERMS[term], t)
+    return options
+
+
+def solve(t: sim_take.Take, options: _core.SolverOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Solved poses (F, 66) and solve times (F,) ms of a take."""
+    solver = Solver(t.skeleton, t.rig, t.layout, t.imus, options=options)
+    sensors = list(range(len(t.imus)))
+    thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
+    for f in range(len(t.thetas)):
+        kp = t.keypoints[f]
+        cams = list(range(len(t.rig.cameras))) if kp is not None else []
+        kp = kp if kp is not None else np.zeros((0, len(t.layout), 3))
+        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f], t.accelerations[f])
+        thetas[f], ms[f] = r.theta, r.solve_time_ms
+    return thetas, ms
+
+
+def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: float) -> dict:
+    fk_t = [skeleton.forward_kinematics(th) for th in truth]
+    fk_s = [skeleton.forward_kinematics(th) for th in solved]
+    p_t, p_s = np.array([p for _, p in fk_t]), np.array([p for _, p in fk_s])
+    r_t, r_s = np.array([r for r, _ in fk_t]), np.array([r for r, _ in fk_s])
+    pos = np.linalg.norm(p_s - p_t, axis=-1)  # (F, J) m
+    ori = np.degrees(rotations.angle_between(r_s, r_t))  # (F, J)
+    vel = np.linalg.norm(np.diff(p_s, axis=0) - np.diff(p_t, axis=0), axis=-1) / dt  # (F-1, J) m/s
+    names = skeleton.bone_names
+    return {"pos_error_cm": 100 * float(pos.mean()), "ori_error_deg": float(ori.mean()),
+            "vel_error_cms": 100 * float(vel.mean()),
+            "per_joint": {n: {"pos_cm": 100 * float(pos[:, j].mean()), "ori_deg": float(ori[:, j].mean())}
+                          for j, n in enumerate(names)},
+            "pos_error_cm_per_frame": (100 * pos.mean(axis=1)).round(3).tolist()}
+
+
+def _triangulate(rig: _core.Rig, views: list[tuple[int, np.ndarray]]) -> np.ndarray:
+    rows = []
+    for c, px in views:
+        cam = rig.cameras[c]
+        u, v = cam.undistort(px[None])[0]
+        p = np.hstack([cam.rotation, cam.translation[:, None]])
+        rows += [u * p[2] - p[0], v * p[2] - p[1]]
+    x = np.linalg.svd(np.array(rows))[2][-1]
+    return x[:3] / x[3]
+
+
+def floor_cm(t: sim_take.Take) -> float:
+    """Systematic errors alone, triangulated exactly from every camera that sees the point."""
+    centres = np.flatnonzero(np.linalg.norm(t.layout.offsets, axis=1) < 1e-9)  # joint-centre keypoints
+    errs = []
+    for theta in t.thetas[:: max(1, len(t.thetas) // 60)]:
+        _, pos = t.skeleton.forward_kinematics(theta)
+        points = studio.site_positions(t.skeleton, t.layout.bones, t.detector_sites, theta)
+        for k in centres:
+            views = []
+            for c, cam in enumerate(t.true_rig.cameras):
+                px, ok = cam.project(points[k][None])
+                if ok[0] and 0 <= px[0, 0] < cam.width and 0 <= px[0, 1] < cam.height:
+                    views.append((c, px[0]))
+            if len(views) >= 2:
+                errs.append(np.linalg.norm(_triangulate(t.rig, views) - pos[t.layout.bones[k]]))
+    return 100 * float(np.mean(errs)) if errs else float("nan")
+
+
+def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int) -> dict:
+    rng = np.random.default_rng(seed)
+    t = sim_take.simulate(clip, config, rng)
+    solved, ms = solve(t, solver_options(omit))
+    result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate)
+    result.update({"clip": str(clip), "preset": config.preset, "cameras": len(t.rig.cameras),
+                   "imus": len(t.imus), "omit": omit, "site_offsets": config.detector.site_offsets,
+                   "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
+                   "calibration": t.calibration, "floor_cm": floor_cm(t)})
+    return result
+
+
+def summarise(results: list[dict]) -> dict:
+    """Means over clips (weighted by frames) of the headline metrics, and every clip's result."""
+    frames = np.array([r["frames"] for r in results], dtype=float)
+    mean = {k: float(np.average([r[k] for r in results], weights=frames))
+            for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "floor_cm")}
+    first = results[0]
+    return {**mean, "frames": int(frames.sum()), "solve_ms_median": float(np.median([r["solve_ms_median"] for r in results])),
+            "calibration": first["calibration"], "preset": first["preset"], "cameras": first["cameras"],
+            "imus": first["imus"], "omit": first["omit"], "site_offsets": first["site_offsets"], "seed": first["seed"],
+            "clips": results}

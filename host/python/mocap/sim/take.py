@@ -1,0 +1,144 @@
+"""A simulated take: a real clip played in front of simulated cameras and IMUs.
+
+Presets as the paper: HQ detects on every frame with 8 cameras; HS on 2 consecutive
+frames of every 8 with 4 cameras; with the 13- or 6-IMU set. Cameras: a ring of 4.5 m
+radius around the clip's mean position, 1.0-2.5 m high, 1920x1080, f = 1400 px, radial
+distortion (studio.ring_rig). The solver is told a perturbed rig (0.2 deg and 5 mm of
+extrinsic error per camera) and frame times with 1 ms of jitter; it is given the true
+skeleton and sensor mounting ("oracle" calibration). IMU mounting rotations are drawn
+up to 20 deg.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, paths, retarget, rotations, studio
+from mocap.sim import detector, imu, occlusion
+
+
+@dataclasses.dataclass(frozen=True)
+class Preset:
+    imus: str  # "13" or "6"
+    cameras: int
+    period: int  # detections on `burst` consecutive frames of every `period`
+    burst: int
+
+
+PRESETS = {"hq13": Preset("13", 8, 1, 1), "hs13": Preset("13", 4, 8, 2),
+           "hq6": Preset("6", 8, 1, 1), "hs6": Preset("6", 4, 8, 2)}
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    preset: str = "hq13"
+    cameras: int | None = None  # overrides the preset's
+    layout: str = "blazepose33"
+    rate: float = 60.0  # Hz
+    detector: detector.DetectorErrors = detector.DetectorErrors()
+    imu: imu.ImuErrors = imu.ImuErrors()
+    camera_rotation_deg: float = 0.2
+    camera_shift_m: float = 0.005
+    time_jitter_s: float = 0.001
+    mount_max_deg: float = 20.0
+
+
+@dataclasses.dataclass
+class Take:
+    skeleton: _core.Skeleton
+    layout: _core.KeypointLayout  # nominal sites, as the solver knows them
+    imus: list  # IMU sites with their true mounting (oracle)
+    rig: _core.Rig  # what the solver is told
+    true_rig: _core.Rig
+    thetas: np.ndarray  # (F, 66) truth
+    times: np.ndarray  # (F,) told frame times, s
+    keypoints: list  # per frame: (C, K, 3) or None (no detections this frame)
+    quaternions: np.ndarray  # (F, M, 4) w, x, y, z
+    accelerations: np.ndarray  # (F, M, 3) sensor frame
+    detector_sites: np.ndarray  # (K, 3) true site offsets (nominal + systematic)
+    calibration: str = "oracle"
+
+
+def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
+    cams = []
+    for cam in rig.cameras:
+        axis, shift = rng.normal(size=3), rng.normal(size=3)
+        centre = cam.center() + metres * shift / np.linalg.norm(shift)
+        cam.rotation = rotations.exp(np.radians(degrees) * axis / np.linalg.norm(axis)) @ cam.rotation
+        cam.translation = -cam.rotation @ centre
+        cams.append(cam)
+    return _core.Rig(cams)
+
+
+def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
+    preset = PRESETS[config.preset]
+    mapping, thetas, dt = retarget.load_clip(clip, config.rate)
+    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{config.layout}.json"), skeleton).scaled_to(skeleton)
+    sites = layout.offsets + detector.site_offsets(len(layout), config.detector, rng)
+    imus = _core.load_imu_sites(str(paths.IMU_SETS[preset.imus]), skeleton)
+    for s in imus:
+        axis = rng.normal(size=3)
+        s.mount = rotations.exp(axis / np.linalg.norm(axis) * np.radians(rng.uniform(0, config.mount_max_deg)))
+    n_cams = config.cameras or preset.cameras
+    true_rig = studio.ring_rig(n_cams, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5))
+    told_rig = _perturbed(studio.ring_rig(n_cams, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5)),
+                          config.camera_rotation_deg, config.camera_shift_m, rng)
+    true_times = np.arange(len(thetas)) * dt
+    times = true_times + rng.normal(scale=config.time_jitter_s, size=len(thetas))
+    times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing
+    keypoints = _detections(skeleton, layout, sites, true_rig, thetas, preset, config, rng)
+    quats, accs = _imu_readings(skeleton, imus, thetas, true_times, config, rng)
+    return Take(skeleton, layout, imus, told_rig, true_rig, thetas, times, keypoints, quats, accs, sites)
+
+
+def _detections(skeleton, layout, sites, rig, thetas, preset: Preset, config: Config, rng) -> list:
+    names, parents = skeleton.bone_names, skeleton.parents
+    caps = occlusion.capsules(names, parents)
+    twins = detector.mirror(layout.names)
+    centres = np.array([c.center() for c in rig.cameras])
+    out = []
+    for f, theta in enumerate(thetas):
+        if f % preset.period >= preset.burst:
+            out.append(None)
+            continue
+        rot, pos = skeleton.forward_kinematics(theta)
+        points = studio.site_positions(skeleton, layout.bones, sites, theta)
+        hidden = occlusion.hidden(centres, points, np.asarray(layout.bones), rot, pos, caps, parents)
+        frame = np.zeros((len(rig.cameras), len(layout), 3))
+        for c, cam in enumerate(rig.cameras):
+            px, ok = cam.project(points)
+            frame[c] = detector.detect(np.nan_to_num(px), ok & ~hidden[c], twins, (cam.width, cam.height),
+                                       config.detector, rng)
+        out.append(frame)
+    return out
+
+
+def _imu_readings(skeleton, imus, thetas, times, config: Config, rng):
+    n, m = len(thetas), len(imus)
+    sensor_world, sites, axis = np.zeros((n, m, 3, 3)), np.zeros((n, m, 3)), np.zeros((n, m, 3))
+    parents, offsets = skeleton.parents, skeleton.offsets
+    along = []  # each sensor's bone direction in the bone frame: towards its first child
+    for s in imus:
+        child = next((b for b, p in enumerate(parents) if p == s.bone), None)
+        d = offsets[child] if child is not None else np.array([0.0, 0.0, 1.0])
+        along.append(d / max(np.linalg.norm(d), 1e-9))
+    for f, theta in enumerate(thetas):
+        rot, pos = skeleton.forward_kinematics(theta)
+        for i, s in enumerate(imus):
+            sensor_world[f, i] = rot[s.bone] @ s.mount
+            sites[f, i] = pos[s.bone] + rot[s.bone] @ s.offset
+            axis[f, i] = rot[s.bone] @ along[i]
+    accel = np.zeros((n, m, 3))
+    if n >= 3:
+        h1 = (times[1:-1] - times[:-2])[:, None, None]
+        h2 = (times[2:] - times[1:-1])[:, None, None]
+        accel[1:-1] = 2.0 * ((sites[2:] - sites[1:-1]) / h2 - (sites[1:-1] - sites[:-2]) / h1) / (h1 + h2)
+        accel[0], accel[-1] = accel[1], accel[-2]
+    measured, accel_sensor = imu.corrupt(sensor_world, accel, axis, times, config.imu, rng)
+    reference = np.array([s.reference for s in imus])
+    quats = rotations.quaternion_from_matrix(np.swapaxes(reference, -1, -2)[None] @ measured)
+    return quats, accel_sensor

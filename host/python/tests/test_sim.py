@@ -1,0 +1,94 @@
+"""The simulated studio's error models do what their documentation says."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mocap import _core, paths, rotations
+from mocap.sim import detector, imu, occlusion
+
+
+def test_mirror_pairs_left_and_right_in_every_layout_naming():
+    assert list(detector.mirror(["nose", "left_eye", "right_eye"])) == [0, 2, 1]
+    assert list(detector.mirror(["Nose", "LEye", "REye", "LBigToe", "RBigToe"])) == [0, 2, 1, 4, 3]
+    assert list(detector.mirror(["mouth_left", "mouth_right"])) == [1, 0]
+
+
+def test_random_errors_have_the_documented_size_and_rates():
+    rng = np.random.default_rng(0)
+    k, frames = 33, 3000
+    pixels = np.column_stack([np.linspace(800, 1100, k), np.linspace(200, 900, k)])  # 700 px tall
+    twins = np.arange(k)[::-1]
+    errors = detector.DetectorErrors()
+    err, swapped, conf = [], 0, []
+    for _ in range(frames):
+        det = detector.detect(pixels, np.ones(k, bool), twins, (1920, 1080), errors, rng)
+        e = np.linalg.norm(det[:, :2] - pixels, axis=1)
+        swapped += np.median(e) > 100
+        if np.median(e) < 100:
+            err.append(e)
+            conf.append(det[:, 2])
+    err, conf = np.concatenate(err), np.concatenate(conf)
+    sigma = 0.01 * 700
+    inliers = err < 10 * sigma
+    assert np.sqrt(np.mean(err[inliers] ** 2) / 2) == pytest.approx(sigma, rel=0.15)  # per axis
+    assert (~inliers).mean() == pytest.approx(0.03, abs=0.01)  # gross outliers
+    assert swapped / frames == pytest.approx(0.02, abs=0.01)
+    assert conf[~inliers].mean() < 0.3 < 0.8 < conf[inliers].mean()  # confidence falls with error
+
+
+def test_systematic_only_and_offsets():
+    rng = np.random.default_rng(1)
+    off = detector.site_offsets(1000, detector.DetectorErrors(), rng)
+    assert 0.01 <= np.linalg.norm(off, axis=1).min() and np.linalg.norm(off, axis=1).max() <= 0.03
+    assert not detector.site_offsets(5, detector.DetectorErrors(site_offsets=False), rng).any()
+    pixels = np.array([[100.0, 100.0], [200.0, 300.0]])
+    det = detector.detect(pixels, np.array([True, False]), np.array([0, 1]), (640, 480),
+                          detector.DetectorErrors(random=False), rng)
+    np.testing.assert_allclose(det[0, :2], pixels[0])
+    assert det[1, 2] == 0  # not visible: no detection
+
+
+def test_a_hand_behind_the_back_is_hidden_from_a_camera_in_front():
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    theta = np.zeros(skeleton.pose_dim)
+    theta[2] = 0.95
+    rot, pos = skeleton.forward_kinematics(theta)
+    caps = occlusion.capsules(skeleton.bone_names, skeleton.parents)
+    chest = skeleton.bone_index("spine_upper")
+    behind = pos[chest] + np.array([-0.3, 0.0, 0.0])  # 30 cm behind the chest
+    points = np.array([behind, pos[chest] + [0.3, 0.0, 0.0]])
+    bones = np.array([skeleton.bone_index("hand_l"), skeleton.bone_index("hand_l")])
+    cameras = np.array([[4.0, 0.0, pos[chest][2]], [-4.0, 0.0, pos[chest][2]]])  # front, back
+    hidden = occlusion.hidden(cameras, points, bones, rot, pos, caps, skeleton.parents)
+    assert hidden.tolist() == [[True, False], [False, True]]
+
+
+def test_imu_errors_match_the_spec():
+    rng = np.random.default_rng(2)
+    f, m = 4000, 2
+    truth = np.broadcast_to(np.eye(3), (f, m, 3, 3)).copy()
+    times = np.arange(f) / 60.0
+    errors = dataclasses.replace(imu.ImuErrors(), heading_drift_deg_per_sqrt_min=0.0, wobble_deg_per_ms2=0.0)
+    measured, accel = imu.corrupt(truth, np.zeros((f, m, 3)), np.tile([0, 0, 1.0], (f, m, 1)), times, errors, rng)
+    w = np.degrees(rotations.log(measured))
+    assert np.sqrt((w[..., 0] ** 2).mean()) == pytest.approx(0.75, rel=0.1)
+    assert np.sqrt((w[..., 2] ** 2).mean()) == pytest.approx(1.5, rel=0.1)
+    assert accel[..., 2].mean() == pytest.approx(9.80665, abs=0.2)  # gravity's reaction, + bias
+    assert (accel - accel.mean(axis=0)).std() == pytest.approx(0.03, rel=0.1)
+
+
+def test_eval_scores_a_short_take(shared, tmp_path):
+    import json
+
+    from mocap import cli
+
+    out = tmp_path / "eval.json"
+    assert cli.main(["eval", "--motion", str(shared / "data/mocap/cmu-daz/16_36.bvh"), "--preset", "hq13",
+                     "--json", str(out)]) == 0
+    result = json.loads(out.read_text())
+    assert result["calibration"] == "oracle" and result["frames"] > 50
+    assert 1.0 < result["floor_cm"] < 3.5  # 1-3 cm site offsets + camera perturbation
+    assert result["pos_error_cm"] < 2 * result["floor_cm"]
+    assert result["ori_error_deg"] < 30
