@@ -265,6 +265,35 @@ TEST(Solver, AccelerationTermFollowsTheHistory) {
   EXPECT_EQ(r.counts.accelerations_used, 0);
 }
 
+// HS-style input: keypoints in bursts, IMUs only in between. The pose drifts without
+// keypoints; their return re-acquires it, and the jump is not taken for motion.
+TEST(Solver, ReacquiresAfterFramesWithoutKeypoints) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(14);
+  const Eigen::VectorXd pose = testing::RandomPose(scene.skeleton, &rng, 0.2);
+  SolverOptions options;
+  options.max_iterations = 4;  // a real-time budget
+  auto solver = MakeSolver(scene, testing::PriorThrough({pose}, 23, &rng), options);
+  auto frame = [&](double t, bool keypoints) {
+    FrameObservations f = testing::Render(scene, pose, t);
+    if (!keypoints) f.cameras.clear();
+    return solver->Solve(f);
+  };
+  frame(0.0, true);
+  frame(1 / 60.0, true);
+  for (int i = 2; i < 8; ++i) frame(i / 60.0, false);
+  Eigen::VectorXd drifted = solver->pose();
+  drifted.head<3>() += Eigen::Vector3d(0.5, -0.3, 0.1);  // as if the IMUs had drifted 60 cm
+  solver->SetWarmStart(drifted);
+  SolveResult r = frame(8 / 60.0, false);
+  EXPECT_TRUE(r.flags & kPositionUnconstrained);
+  r = frame(9 / 60.0, true);
+  EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, pose), kMaxJointError);
+  r = frame(10 / 60.0, true);  // history: an unconstrained and a constrained frame
+  EXPECT_EQ(r.counts.accelerations_used, 0);
+  EXPECT_LT(testing::MaxJointError(scene.skeleton, r.theta, pose), kMaxJointError);
+}
+
 TEST(Solver, RejectsInconsistentConfiguration) {
   const testing::Scene scene = testing::MakeScene(2);
   std::string error;
