@@ -77,6 +77,16 @@ def _eval(args: argparse.Namespace) -> int:
     return 0
 
 
+def _imu_stats(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap.sim import imu_stats
+
+    folder = Path(args.imu) if args.imu else paths.shared_file("data/imu")
+    print(json.dumps(imu_stats.stats(folder), indent=1), flush=True)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap", description="Real-time motion capture from video and IMUs.")
     p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
@@ -120,6 +130,10 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")
     e.add_argument("--json", required=True, help="JSON file to write the results to")
     e.set_defaults(func=_eval)
+
+    i = sub.add_parser("imu-stats", help="noise and bias figures of the real IMU recordings (for the simulator)")
+    i.add_argument("--imu", default=None, help="folder of the recordings (default ../shared/data/imu)")
+    i.set_defaults(func=_imu_stats)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
     r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")

@@ -92,3 +92,15 @@ def test_eval_scores_a_short_take(shared, tmp_path):
     assert 1.0 < result["floor_cm"] < 3.5  # 1-3 cm site offsets + camera perturbation
     assert result["pos_error_cm"] < 2 * result["floor_cm"]
     assert result["ori_error_deg"] < 30
+
+
+def test_imu_stats_of_the_real_recordings(shared):
+    from mocap.sim import imu_stats
+
+    stats = imu_stats.stats(shared / "data/imu")
+    noise = np.array(stats["handheld"]["accel_noise_ms2"] +
+                     [v for s in stats["xsens_mtw_walking"].values() for v in s["accel_noise_ms2"]])
+    assert len(stats["xsens_mtw_walking"]) == 8 and stats["handheld"]["stationary_blocks"] >= 3
+    # The simulator's 0.03 m/s^2 white noise sits inside what the sensors show at rest.
+    assert noise.min() < imu.ImuErrors().accel_noise < noise.max() < 0.1
+    assert abs(stats["handheld"]["accel_norm_bias_ms2"]) < 2 * imu.ImuErrors().accel_bias

@@ -7,7 +7,7 @@ heading drift (random walk, 0.5 deg/sqrt(min)), and soft-tissue wobble: a rotati
 Acceleration = second derivative of the sensor site + gravity's reaction, in the sensor
 frame, + white noise 0.03 m/s^2 per axis + a constant bias per sensor and axis drawn
 with 0.05 m/s^2 RMS. The noise and bias figures come from the real recordings
-(`mocap imu-stats`: handheld sensor at rest 0.024-0.040 m/s^2 per axis, |a| - g of
+(`mocap imu-stats`: handheld sensor at rest 0.026-0.054 m/s^2 per axis, |a| - g of
 -0.06 m/s^2; Xsens MTw at the quietest 0.5 s of the walk 0.013-0.049 m/s^2).
 """
 
