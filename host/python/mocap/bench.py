@@ -14,8 +14,7 @@ import os
 import numpy as np
 
 from mocap import _core, paths, prior, retarget, rotations, studio
-from mocap.errors import InputError
-from mocap.solver import Solver
+from mocap.solver import Solver, solver_options
 
 BENCH_CLIPS = ["data/mocap/cmu-131/131_01.bvh", "data/mocap/cmu-131/131_02.bvh",
                "data/mocap/cmu-131/131_03.bvh"]
@@ -86,22 +85,6 @@ def _run(skeleton, layout, imus, pose_prior, options, takes: list[Take]) -> dict
             "mean_ms": round(float(t.mean()), 4), "mean_iterations": round(float(np.mean(iterations)), 3),
             "mean_joint_error_mm": round(1000 * float(np.mean(joint_err)), 2),
             "median_parts_ms": {k: round(float(np.median([p[k] for p in parts])), 4) for k in parts[0]}}
-
-
-def solver_options(settings: list[str]) -> _core.SolverOptions:
-    """SolverOptions with "name=value" or "term.field=value" settings applied."""
-    options = _core.SolverOptions()
-    for setting in settings:
-        name, _, value = setting.partition("=")
-        target, _, field = name.rpartition(".")
-        owner = getattr(options, target) if target else options
-        if not hasattr(owner, field) or not value:
-            raise InputError(f"unknown solver option or missing value: {setting!r}")
-        current = getattr(owner, field)
-        setattr(owner, field, value.lower() in ("1", "true", "on") if isinstance(current, bool) else type(current)(float(value)))
-        if target:
-            setattr(options, target, owner)  # terms are copied out and back
-    return options
 
 
 def solver(rate: float = 60.0, seed: int = 0, repeats: int = 3, settings: list[str] = (),

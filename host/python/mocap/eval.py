@@ -14,13 +14,14 @@ import numpy as np
 
 from mocap import _core, rotations, studio
 from mocap.sim import take as sim_take
-from mocap.solver import Solver
+from mocap.solver import Solver, solver_options
 
 TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation"}
 
 
-def solver_options(omit: list[str]) -> _core.SolverOptions:
-    options = _core.SolverOptions()
+def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOptions:
+    """Solver options with the omitted terms off and "name=value" settings applied."""
+    options = solver_options(list(settings))
     for term in omit:
         t = getattr(options, TERMS[term])
         t.enabled = False
@@ -87,13 +88,14 @@ def floor_cm(t: sim_take.Take) -> float:
     return 100 * float(np.mean(errs)) if errs else float("nan")
 
 
-def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int) -> dict:
+def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = ()) -> dict:
     rng = np.random.default_rng(seed)
     t = sim_take.simulate(clip, config, rng)
-    solved, ms = solve(t, solver_options(omit))
+    solved, ms = solve(t, options_for(omit, settings))
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate)
     result.update({"clip": str(clip), "preset": config.preset, "cameras": len(t.rig.cameras),
-                   "imus": len(t.imus), "omit": omit, "site_offsets": config.detector.site_offsets,
+                   "imus": len(t.imus), "omit": omit, "settings": list(settings),
+                   "site_offsets": config.detector.site_offsets,
                    "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
                    "calibration": t.calibration, "floor_cm": floor_cm(t)})
     return result

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from mocap import _core, prior
+from mocap.errors import InputError
 
 _DEFAULT = object()
 
@@ -14,3 +15,19 @@ class Solver(_core.Solver):
     def __init__(self, skeleton, rig, layout, imus, prior_model=_DEFAULT, options=None):
         model = prior.load() if prior_model is _DEFAULT else prior_model
         super().__init__(skeleton, rig, layout, imus, model, options or _core.SolverOptions())
+
+
+def solver_options(settings: list[str]) -> _core.SolverOptions:
+    """SolverOptions with "name=value" or "term.field=value" settings applied."""
+    options = _core.SolverOptions()
+    for setting in settings:
+        name, _, value = setting.partition("=")
+        target, _, field = name.rpartition(".")
+        owner = getattr(options, target) if target else options
+        if not hasattr(owner, field) or not value:
+            raise InputError(f"unknown solver option or missing value: {setting!r}")
+        current = getattr(owner, field)
+        setattr(owner, field, value.lower() in ("1", "true", "on") if isinstance(current, bool) else type(current)(float(value)))
+        if target:
+            setattr(options, target, owner)  # terms are copied out and back
+    return options
