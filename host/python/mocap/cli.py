@@ -70,7 +70,7 @@ def _eval(args: argparse.Namespace) -> int:
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
-    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set) for clip in clips]
+    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline) for clip in clips]
     summary = evaluation.summarise(results)
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
@@ -128,6 +128,8 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--site-offsets", default="on", choices=["on", "off"],
                    help="the detector's systematic 1-3 cm site offsets (default on)")
     e.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")
+    e.add_argument("--baseline", default=None, choices=["imu-only"],
+                   help="score a baseline instead of the fused solver (triangulation: not yet)")
     e.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                    help="a solver option, e.g. acceleration.weight=0.01 (repeatable)")
     e.add_argument("--json", required=True, help="JSON file to write the results to")

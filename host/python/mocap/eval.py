@@ -43,6 +43,27 @@ def solve(t: sim_take.Take, options: _core.SolverOptions) -> tuple[np.ndarray, n
     return thetas, ms
 
 
+def imu_only(t: sim_take.Take) -> np.ndarray:
+    """Baseline: IMU orientations drive forward kinematics (bones without a sensor follow
+    their parent), the root held at the true position, as an IMU suit without position
+    aiding scored after aligning the root."""
+    parents = t.skeleton.parents
+    world = rotations.matrix_from_quaternion(t.quaternions)  # (F, M, 3, 3) sensor -> reference
+    reference = np.array([s.reference for s in t.imus])
+    mount = np.array([s.mount for s in t.imus])
+    bone_world = reference[None] @ world @ np.swapaxes(mount, -1, -2)[None]  # R_ig R_i R_m^T
+    thetas = np.zeros_like(t.thetas)
+    thetas[:, :3] = t.thetas[:, :3]
+    by_bone = {s.bone: i for i, s in enumerate(t.imus)}
+    for f in range(len(thetas)):
+        g = np.empty((len(parents), 3, 3))
+        for b, p in enumerate(parents):
+            g[b] = bone_world[f, by_bone[b]] if b in by_bone else (g[p] if p >= 0 else np.eye(3))
+            local = g[b] if p < 0 else g[p].T @ g[b]
+            thetas[f, 3 + 3 * b : 6 + 3 * b] = rotations.log(local)
+    return thetas
+
+
 def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: float) -> dict:
     fk_t = [skeleton.forward_kinematics(th) for th in truth]
     fk_s = [skeleton.forward_kinematics(th) for th in solved]
@@ -88,12 +109,18 @@ def floor_cm(t: sim_take.Take) -> float:
     return 100 * float(np.mean(errs)) if errs else float("nan")
 
 
-def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = ()) -> dict:
+def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
+             baseline: str | None = None) -> dict:
+    """Scores the fused solver, or with `baseline="imu-only"` the IMU-only baseline."""
     rng = np.random.default_rng(seed)
     t = sim_take.simulate(clip, config, rng)
-    solved, ms = solve(t, options_for(omit, settings))
+    if baseline == "imu-only":
+        solved, ms = imu_only(t), np.zeros(len(t.thetas))
+    else:
+        solved, ms = solve(t, options_for(omit, settings))
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate)
-    result.update({"clip": str(clip), "preset": config.preset, "cameras": len(t.rig.cameras),
+    result.update({"clip": str(clip), "method": baseline or "fused", "preset": config.preset,
+                   "cameras": len(t.rig.cameras),
                    "imus": len(t.imus), "omit": omit, "settings": list(settings),
                    "site_offsets": config.detector.site_offsets,
                    "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
@@ -108,6 +135,7 @@ def summarise(results: list[dict]) -> dict:
             for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "floor_cm")}
     first = results[0]
     return {**mean, "frames": int(frames.sum()), "solve_ms_median": float(np.median([r["solve_ms_median"] for r in results])),
-            "calibration": first["calibration"], "preset": first["preset"], "cameras": first["cameras"],
+            "calibration": first["calibration"], "method": first["method"], "preset": first["preset"],
+            "cameras": first["cameras"],
             "imus": first["imus"], "omit": first["omit"], "site_offsets": first["site_offsets"], "seed": first["seed"],
             "clips": results}

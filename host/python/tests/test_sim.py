@@ -104,3 +104,16 @@ def test_imu_stats_of_the_real_recordings(shared):
     # The simulator's 0.03 m/s^2 white noise sits inside what the sensors show at rest.
     assert noise.min() < imu.ImuErrors().accel_noise < noise.max() < 0.1
     assert abs(stats["handheld"]["accel_norm_bias_ms2"]) < 2 * imu.ImuErrors().accel_bias
+
+
+def test_imu_only_baseline_follows_the_sensors(shared):
+    from mocap import eval as evaluation
+    from mocap.sim import take
+
+    config = take.Config(preset="hq13", imu=dataclasses.replace(imu.ImuErrors(), random=False))
+    t = take.simulate(shared / "data/mocap/cmu-daz/16_36.bvh", config, np.random.default_rng(0))
+    result = evaluation.errors(t.skeleton, t.thetas, evaluation.imu_only(t), 1 / 60)
+    # Noise-free sensors: every bone carrying one is exact, and the root is aligned.
+    for name in ("pelvis", "spine_upper", "forearm_l", "shin_r", "foot_l"):
+        assert result["per_joint"][name]["ori_deg"] < 1e-6
+    assert result["per_joint"]["pelvis"]["pos_cm"] < 1e-9
