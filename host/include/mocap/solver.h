@@ -42,7 +42,9 @@ struct SolverOptions {
   // positions, whose own jitter (~5 mm at 60 Hz) is ~20 m/s^2: hence a soft 30 m/s^2.
   TermOptions acceleration{true, 1.0 / (30.0 * 30.0), LossType::kCauchy, 1.0};
   TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
-  TermOptions pca_deviation{true, 0.02, LossType::kTrivial, 1.0};                  // per sigma^2
+  // One standard deviation of the prior costs as much as a keypoint at its typical error;
+  // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander (issue 3 eval).
+  TermOptions pca_deviation{true, 1.0, LossType::kTrivial, 1.0};
 
   Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
   double min_confidence = 0.05;                  // detections at or below are "not detected"
