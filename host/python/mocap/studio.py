@@ -55,29 +55,37 @@ def keypoints(rig: _core.Rig, points: np.ndarray) -> np.ndarray:
     return out
 
 
-def imu_readings(skeleton: _core.Skeleton, imus, thetas: np.ndarray, times: np.ndarray,
-                 accel_at_rest=(0.0, 0.0, 9.80665)):
-    """Exact (frames, M, 4) orientations (w, x, y, z) and (frames, M, 3) accelerations.
+def sensor_motion(skeleton: _core.Skeleton, imus, thetas: np.ndarray, times: np.ndarray):
+    """True sensor orientations (F, M, 3, 3, sensor -> world) and site accelerations
+    (F, M, 3, world, gravity not included) of a pose sequence.
 
-    Acceleration at frame f is the second difference of the site over (f-1, f, f+1),
-    the quantity the solver's E_A compares; the ends repeat their neighbours.
+    Acceleration at frame f is the second difference of the site over (f-1, f, f+1), the
+    quantity the solver's E_A compares; the ends repeat their neighbours.
     """
     n, m = len(thetas), len(imus)
-    quats = np.zeros((n, m, 4))
-    sensor_world = np.zeros((n, m, 3, 3))
-    sites = np.zeros((n, m, 3))
-    bones = [s.bone for s in imus]
+    sensor_world, sites = np.zeros((n, m, 3, 3)), np.zeros((n, m, 3))
     for f, theta in enumerate(thetas):
         rot, pos = skeleton.forward_kinematics(theta)
         for i, s in enumerate(imus):
-            sensor_world[f, i] = rot[bones[i]] @ s.mount
-            sites[f, i] = pos[bones[i]] + rot[bones[i]] @ s.offset
-            quats[f, i] = rotations.quaternion_from_matrix(s.reference.T @ sensor_world[f, i])
-    acc_world = np.zeros((n, m, 3))
+            sensor_world[f, i] = rot[s.bone] @ s.mount
+            sites[f, i] = pos[s.bone] + rot[s.bone] @ s.offset
+    accel = np.zeros((n, m, 3))
     if n >= 3:
         h1 = (times[1:-1] - times[:-2])[:, None, None]
         h2 = (times[2:] - times[1:-1])[:, None, None]
-        acc_world[1:-1] = 2.0 * ((sites[2:] - sites[1:-1]) / h2 - (sites[1:-1] - sites[:-2]) / h1) / (h1 + h2)
-        acc_world[0], acc_world[-1] = acc_world[1], acc_world[-2]
-    acc = np.einsum("fmji,fmj->fmi", sensor_world, acc_world + np.asarray(accel_at_rest))
-    return quats, acc
+        accel[1:-1] = 2.0 * ((sites[2:] - sites[1:-1]) / h2 - (sites[1:-1] - sites[:-2]) / h1) / (h1 + h2)
+        accel[0], accel[-1] = accel[1], accel[-2]
+    return sensor_world, accel
+
+
+def readings(imus, sensor_world: np.ndarray, accel_world: np.ndarray, accel_at_rest=(0.0, 0.0, 9.80665)):
+    """(F, M, 4) orientations (w, x, y, z, sensor -> each IMU's reference) and (F, M, 3)
+    accelerometer readings (sensor frame, gravity's reaction included)."""
+    reference = np.array([s.reference for s in imus])
+    quats = rotations.quaternion_from_matrix(np.swapaxes(reference, -1, -2)[None] @ sensor_world)
+    return quats, np.einsum("fmji,fmj->fmi", sensor_world, accel_world + np.asarray(accel_at_rest))
+
+
+def imu_readings(skeleton: _core.Skeleton, imus, thetas: np.ndarray, times: np.ndarray):
+    """Exact readings of a pose sequence: see sensor_motion and readings."""
+    return readings(imus, *sensor_motion(skeleton, imus, thetas, times))

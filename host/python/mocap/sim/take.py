@@ -118,27 +118,13 @@ def _detections(skeleton, layout, sites, rig, thetas, preset: Preset, config: Co
 
 
 def _imu_readings(skeleton, imus, thetas, times, config: Config, rng):
-    n, m = len(thetas), len(imus)
-    sensor_world, sites, axis = np.zeros((n, m, 3, 3)), np.zeros((n, m, 3)), np.zeros((n, m, 3))
+    sensor_world, accel = studio.sensor_motion(skeleton, imus, thetas, times)
     parents, offsets = skeleton.parents, skeleton.offsets
-    along = []  # each sensor's bone direction in the bone frame: towards its first child
-    for s in imus:
+    axis = np.zeros(accel.shape)  # each sensor's bone direction, towards the bone's first child
+    for i, s in enumerate(imus):
         child = next((b for b, p in enumerate(parents) if p == s.bone), None)
-        d = offsets[child] if child is not None else np.array([0.0, 0.0, 1.0])
-        along.append(d / max(np.linalg.norm(d), 1e-9))
-    for f, theta in enumerate(thetas):
-        rot, pos = skeleton.forward_kinematics(theta)
-        for i, s in enumerate(imus):
-            sensor_world[f, i] = rot[s.bone] @ s.mount
-            sites[f, i] = pos[s.bone] + rot[s.bone] @ s.offset
-            axis[f, i] = rot[s.bone] @ along[i]
-    accel = np.zeros((n, m, 3))
-    if n >= 3:
-        h1 = (times[1:-1] - times[:-2])[:, None, None]
-        h2 = (times[2:] - times[1:-1])[:, None, None]
-        accel[1:-1] = 2.0 * ((sites[2:] - sites[1:-1]) / h2 - (sites[1:-1] - sites[:-2]) / h1) / (h1 + h2)
-        accel[0], accel[-1] = accel[1], accel[-2]
+        along = offsets[child] / max(np.linalg.norm(offsets[child]), 1e-9) if child is not None else np.array([0, 0, 1.0])
+        axis[:, i] = sensor_world[:, i] @ s.mount.T @ along  # bone frame -> world
     measured, accel_sensor = imu.corrupt(sensor_world, accel, axis, times, config.imu, rng)
-    reference = np.array([s.reference for s in imus])
-    quats = rotations.quaternion_from_matrix(np.swapaxes(reference, -1, -2)[None] @ measured)
+    quats, _ = studio.readings(imus, measured, accel)
     return quats, accel_sensor
