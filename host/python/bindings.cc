@@ -11,6 +11,7 @@
 #include "mocap/initialisation.h"
 #include "mocap/kinematics.h"
 #include "mocap/prior.h"
+#include "mocap/residuals/point_residual.h"
 #include "mocap/sites.h"
 #include "mocap/skeleton.h"
 #include "mocap/so3.h"
@@ -122,6 +123,31 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "Host solver of the mocap system (C++ / Ceres).";
 
   m.def("so3_exp", &Exp, "Rotation matrix of a rotation vector.");
+  m.def(
+      "fit_to_points",
+      [](const Skeleton& skeleton, const std::vector<int>& bones, const Eigen::MatrixX3d& offsets,
+         const Eigen::MatrixX3d& targets, const Eigen::VectorXd& weights, Eigen::VectorXd theta,
+         int max_iterations) {
+        const size_t n = bones.size();
+        if (offsets.rows() != static_cast<long>(n) || targets.rows() != static_cast<long>(n) ||
+            weights.size() != static_cast<long>(n)) {
+          throw std::invalid_argument(
+              "bones, offsets, targets and weights must have one row per site");
+        }
+        std::vector<Site> sites(n);
+        std::vector<Eigen::Vector3d> points(n);
+        for (size_t i = 0; i < n; ++i) {
+          sites[i] = {bones[i], offsets.row(i).transpose()};
+          points[i] = targets.row(i).transpose();
+        }
+        const bool ok = FitToPoints(skeleton, sites, points,
+                                    std::vector<double>(weights.data(), weights.data() + n),
+                                    max_iterations, &theta);
+        return py::make_tuple(ok, theta);
+      },
+      py::arg("skeleton"), py::arg("bones"), py::arg("offsets"), py::arg("targets"),
+      py::arg("weights"), py::arg("theta"), py::arg("max_iterations") = 20,
+      "Fit theta to 3D target points of sites (bone, offset); returns (ok, theta).");
   m.def("so3_log", &Log, "Rotation vector of a rotation matrix.");
 
   py::class_<Skeleton>(m, "Skeleton")

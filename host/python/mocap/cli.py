@@ -128,8 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--site-offsets", default="on", choices=["on", "off"],
                    help="the detector's systematic 1-3 cm site offsets (default on)")
     e.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")
-    e.add_argument("--baseline", default=None, choices=["imu-only"],
-                   help="score a baseline instead of the fused solver (triangulation: not yet)")
+    e.add_argument("--baseline", default=None, choices=["imu-only", "triangulation"],
+                   help="score a baseline instead of the fused solver: IMU-only FK, or real-time robust "
+                        "triangulation + swap fix + one-euro smoothing + bone-length fit")
     e.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                    help="a solver option, e.g. acceleration.weight=0.01 (repeatable)")
     e.add_argument("--json", required=True, help="JSON file to write the results to")

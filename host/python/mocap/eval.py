@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap import _core, rotations, studio
+from mocap import _core, baselines, rotations, studio
 from mocap.sim import take as sim_take
 from mocap.solver import Solver, solver_options
 
@@ -111,11 +111,13 @@ def floor_cm(t: sim_take.Take) -> float:
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
              baseline: str | None = None) -> dict:
-    """Scores the fused solver, or with `baseline="imu-only"` the IMU-only baseline."""
+    """Scores the fused solver, or a baseline: "imu-only" or "triangulation" (baselines.py)."""
     rng = np.random.default_rng(seed)
     t = sim_take.simulate(clip, config, rng)
     if baseline == "imu-only":
         solved, ms = imu_only(t), np.zeros(len(t.thetas))
+    elif baseline == "triangulation":
+        solved, ms = baselines.video_only(t), np.zeros(len(t.thetas))
     else:
         solved, ms = solve(t, options_for(omit, settings))
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate)

@@ -10,6 +10,7 @@
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
+#include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
 #include "mocap/so3.h"
 #include "synthetic_scene.h"
@@ -147,6 +148,27 @@ TEST_F(ResidualsTest, AccelerationMatchesTheSecondDifference) {
   ASSERT_TRUE(uniform.Evaluate(ChainBlocks(scene_.skeleton, site.bone, theta.data()).data(),
                                r.data(), nullptr));
   EXPECT_LT((r - (xs - 2 * x1 + x0) / (dt * dt)).norm(), 1e-6);
+}
+
+TEST_F(ResidualsTest, PointTermAndFitToPoints) {
+  std::vector<Site> sites;
+  std::vector<Eigen::Vector3d> targets;
+  for (const Site& site : scene_.layout.sites) {
+    sites.push_back(site);
+    targets.push_back(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset);
+    PointResidual f(fk_.get(), site, targets.back(), 4.0);
+    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.2, 0.1, &rng_));
+    ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
+  }
+  // Exact targets of every site, from 10 degrees away: the sites come back.
+  Eigen::VectorXd theta = testing::Perturb(truth_, 10 * M_PI / 180, 0.05, &rng_);
+  std::vector<double> weights(sites.size(), 1.0);
+  weights[0] = std::nan("");  // ignored, not fatal
+  ASSERT_TRUE(FitToPoints(scene_.skeleton, sites, targets, weights, 50, &theta));
+  EXPECT_LT(testing::MaxSiteError(scene_, theta, truth_), 1e-6);
+  EXPECT_FALSE(FitToPoints(scene_.skeleton, sites, targets, std::vector<double>(sites.size(), 0.0),
+                           50, &theta));
 }
 
 TEST_F(ResidualsTest, PcaTermsAreZeroAtTheMeanAndMatchTheirDefinition) {
