@@ -8,7 +8,7 @@ import logging
 import sys
 
 from mocap import paths
-from mocap.errors import DataMissingError, MocapError
+from mocap.errors import DataMissingError, InputError, MocapError
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -66,6 +66,14 @@ def _eval(args: argparse.Namespace) -> int:
     from mocap import eval as evaluation
     from mocap.sim import detector, take
 
+    if args.table:
+        from mocap import tables
+
+        summary = tables.write(args.seed, Path(args.docs), f"mocap eval --table paper --seed {args.seed}")
+        print(json.dumps({p: round(s["pos_error_cm"], 2) for p, s in summary["configurations"].items()}), flush=True)
+        return 0
+    if not args.motion or not args.json:
+        raise InputError("--motion and --json are needed unless --table is given")
     motion = Path(args.motion)
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
     config = take.Config(preset=args.preset, cameras=args.cameras,
@@ -120,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.set_defaults(func=_train_prior)
 
     e = sub.add_parser("eval", help="simulate takes of real motion, solve them and score the solver")
-    e.add_argument("--motion", required=True, help="BVH file or folder of BVH files (searched recursively)")
+    e.add_argument("--motion", help="BVH file or folder of BVH files (searched recursively)")
     e.add_argument("--preset", default="hq13", choices=["hq13", "hs13", "hq6", "hs6"],
                    help="HQ: detections every frame, 8 cameras; HS: 2 of every 8 frames, 4 cameras (default hq13)")
     e.add_argument("--cameras", type=int, default=None, help="number of cameras (default: the preset's)")
@@ -133,7 +141,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "triangulation + swap fix + one-euro smoothing + bone-length fit")
     e.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                    help="a solver option, e.g. acceleration.weight=0.01 (repeatable)")
-    e.add_argument("--json", required=True, help="JSON file to write the results to")
+    e.add_argument("--json", help="JSON file to write the results to")
+    e.add_argument("--table", choices=["paper"], help="regenerate the paper's tables and plots on the test clips")
+    e.add_argument("--docs", default=str(paths.REPO / "docs"), help="where --table writes results.md (default docs/)")
     e.set_defaults(func=_eval)
 
     i = sub.add_parser("imu-stats", help="noise and bias figures of the real IMU recordings (for the simulator)")

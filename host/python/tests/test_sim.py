@@ -117,3 +117,13 @@ def test_imu_only_baseline_follows_the_sensors(shared):
     for name in ("pelvis", "spine_upper", "forearm_l", "shin_r", "foot_l"):
         assert result["per_joint"][name]["ori_deg"] < 1e-6
     assert result["per_joint"]["pelvis"]["pos_cm"] < 1e-9
+
+
+def test_camera_positions_spread_round_the_ring():
+    from mocap.sim.take import camera_positions
+
+    assert camera_positions(8) == list(range(8))
+    assert camera_positions(4) == [0, 2, 4, 6]
+    assert camera_positions(2) == [0, 2]  # 90 degrees apart, never opposite
+    with pytest.raises(ValueError):
+        camera_positions(9)

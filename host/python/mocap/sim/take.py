@@ -1,9 +1,9 @@
 """A simulated take: a real clip played in front of simulated cameras and IMUs.
 
 Presets as the paper: HQ detects on every frame with 8 cameras; HS on 2 consecutive
-frames of every 8 with 4 cameras; with the 13- or 6-IMU set. Cameras: a ring of 4.5 m
-radius around the clip's mean position, 1.0-2.5 m high, 1920x1080, f = 1400 px, radial
-distortion (studio.ring_rig). The solver is told a perturbed rig (0.2 deg and 5 mm of
+frames of every 8 with 4 cameras; with the 13- or 6-IMU set. Cameras: positions on a
+ring of 4.5 m radius around the clip's mean position (8 positions 45 degrees apart,
+1.0 or 2.5 m high), 1920x1080, f = 1400 px, radial distortion (studio.ring_rig). The solver is told a perturbed rig (0.2 deg and 5 mm of
 extrinsic error per camera) and frame times with 1 ms of jitter; it is given the true
 skeleton and sensor mounting ("oracle" calibration). IMU mounting rotations are drawn
 up to 20 deg.
@@ -40,6 +40,7 @@ class Config:
     rate: float = 60.0  # Hz
     detector: detector.DetectorErrors = detector.DetectorErrors()
     imu: imu.ImuErrors = imu.ImuErrors()
+    detect_every: tuple[int, int] | None = None  # (period, burst): overrides the preset's
     camera_rotation_deg: float = 0.2
     camera_shift_m: float = 0.005
     time_jitter_s: float = 0.001
@@ -62,6 +63,15 @@ class Take:
     calibration: str = "oracle"
 
 
+def camera_positions(n: int) -> list[int]:
+    """Which of the 8 ring positions (45 degrees apart) n cameras take: spread evenly, except
+    that two cameras stand 90 degrees apart (opposite cameras cannot triangulate along
+    their common axis)."""
+    if not 1 <= n <= 8:
+        raise ValueError(f"1 to 8 cameras, not {n}")
+    return [0, 2] if n == 2 else sorted({round(i * 8 / n) % 8 for i in range(n)})
+
+
 def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
     cams = []
     for cam in rig.cameras:
@@ -75,6 +85,8 @@ def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
 
 def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
     preset = PRESETS[config.preset]
+    if config.detect_every:
+        preset = dataclasses.replace(preset, period=config.detect_every[0], burst=config.detect_every[1])
     mapping, thetas, dt = retarget.load_clip(clip, config.rate)
     skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{config.layout}.json"), skeleton).scaled_to(skeleton)
@@ -83,10 +95,11 @@ def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
     for s in imus:
         axis = rng.normal(size=3)
         s.mount = rotations.exp(axis / np.linalg.norm(axis) * np.radians(rng.uniform(0, config.mount_max_deg)))
-    n_cams = config.cameras or preset.cameras
-    true_rig = studio.ring_rig(n_cams, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5))
-    told_rig = _perturbed(studio.ring_rig(n_cams, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5)),
-                          config.camera_rotation_deg, config.camera_shift_m, rng)
+    chosen = camera_positions(config.cameras or preset.cameras)
+    ring = lambda: studio.ring_rig(8, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5))  # noqa: E731
+    true_rig = _core.Rig([ring().cameras[i] for i in chosen])
+    told_rig = _perturbed(_core.Rig([ring().cameras[i] for i in chosen]), config.camera_rotation_deg,
+                          config.camera_shift_m, rng)
     true_times = np.arange(len(thetas)) * dt
     times = true_times + rng.normal(scale=config.time_jitter_s, size=len(thetas))
     times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing

@@ -1,0 +1,196 @@
+"""The paper's tables and plots on the test clips (`mocap eval --table paper`).
+
+Writes docs/results.md (tables, with the command that regenerates them), the raw results
+as JSON beside it, and PNG plots under docs/results/.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from mocap import eval as evaluation
+from mocap import paths, prior
+from mocap.sim import take
+
+log = logging.getLogger(__name__)
+
+ABLATIONS = [("IMU (E_R, E_A)", ["R", "A"]), ("Ori. (E_R)", ["R"]), ("Acc. (E_A)", ["A"]),
+             ("Pos. (E_P)", ["P"]), ("Prior (E_PP, E_PD)", ["PP", "PD"]), ("Prior proj. (E_PP)", ["PP"]),
+             ("Prior dev. (E_PD)", ["PD"])]
+SUBSAMPLING = [(1, 1), (4, 1), (8, 2), (8, 1), (16, 2)]
+
+
+def test_clips() -> list[Path]:
+    root = paths.shared_file("data/mocap")
+    return [root / c for c in sorted(prior.test_clips())]
+
+
+def _run(clips, config, omit=(), baseline=None, seed=0) -> dict:
+    results = [evaluation.evaluate(c, config, list(omit), seed, baseline=baseline) for c in clips]
+    return evaluation.summarise(results)
+
+
+def compute(seed: int = 0) -> dict:
+    clips = test_clips()
+    out = {"seed": seed, "clips": [c.relative_to(paths.shared_file("data/mocap")).as_posix() for c in clips]}
+    out["configurations"] = {p: _run(clips, take.Config(preset=p), seed=seed) for p in take.PRESETS}
+    out["baselines"] = {b: _run(clips, take.Config(preset="hq13"), baseline=b, seed=seed)
+                        for b in ("triangulation", "imu-only")}
+    out["ablations"] = {}
+    for imus in ("hq13", "hq6"):
+        full = out["configurations"][imus]
+        out["ablations"][imus] = {name: _run(clips, take.Config(preset=imus), omit, seed=seed) for name, omit in ABLATIONS}
+        out["ablations"][imus]["full"] = full
+    out["cameras"] = {n: _run(clips, take.Config(preset="hq13", cameras=n), seed=seed) for n in range(1, 9)}
+    out["subsampling"] = {f"{b} of {p}": _run(clips, take.Config(preset="hq13", detect_every=(p, b)), seed=seed)
+                          for p, b in SUBSAMPLING}
+    out["site_offsets_off"] = {m or "fused": _run(clips, dataclasses.replace(
+        take.Config(preset="hq13"), detector=dataclasses.replace(take.Config().detector, site_offsets=False)),
+        baseline=m, seed=seed) for m in (None, "triangulation")}
+    return out
+
+
+def _clip_name(result: dict) -> str:
+    return Path(result["clip"]).stem
+
+
+def _row(name: str, summary: dict, key: str, fmt: str = "{:.1f}") -> str:
+    cells = [fmt.format(c[key]) for c in summary["clips"]]
+    return f"| {name} | " + " | ".join(cells) + f" | **{fmt.format(summary[key])}** |"
+
+
+def markdown(r: dict, command: str) -> str:
+    conf, base = r["configurations"], r["baselines"]
+    clips = [_clip_name(c) for c in conf["hq13"]["clips"]]
+    head = "| | " + " | ".join(clips) + " | mean |\n|---|" + "---|" * (len(clips) + 1)
+    lines = ["# Results on the test clips", "",
+             f"Regenerate everything on this page: `{command}` (seed {r['seed']}, ~10 minutes on 2 cores).",
+             "Simulated studio of `host/python/mocap/sim/` on the test clips of `host/data/motion_split.json`;",
+             "oracle calibration (true skeleton and sensor mounting); raw numbers in `docs/results.json`.", "",
+             "## Input configurations (paper: \"Number of IMUs and quality/speed trade-off\")", "",
+             "Position error (cm)", "", head]
+    for name, s in [("13 IMU, HQ", conf["hq13"]), ("13 IMU, HS", conf["hs13"]), ("6 IMU, HQ", conf["hq6"]),
+                    ("6 IMU, HS", conf["hs6"]), ("video only (triangulation baseline)", base["triangulation"]),
+                    ("IMU only (root aligned)", base["imu-only"])]:
+        lines.append(_row(name, s, "pos_error_cm"))
+    lines += ["", "Orientation error (deg)", "", head]
+    for name, s in [("13 IMU, HQ", conf["hq13"]), ("13 IMU, HS", conf["hs13"]), ("6 IMU, HQ", conf["hq6"]),
+                    ("6 IMU, HS", conf["hs6"]), ("video only (triangulation baseline)", base["triangulation"]),
+                    ("IMU only (root aligned)", base["imu-only"])]:
+        lines.append(_row(name, s, "ori_error_deg"))
+    lines += ["", "Velocity error (cm/s, jitter) and floor", "", "| | velocity error | floor_cm | solve ms (median) |",
+              "|---|---|---|---|"]
+    for name, s in [("13 IMU, HQ", conf["hq13"]), ("13 IMU, HS", conf["hs13"]), ("6 IMU, HQ", conf["hq6"]),
+                    ("6 IMU, HS", conf["hs6"]), ("video only", base["triangulation"]), ("IMU only", base["imu-only"])]:
+        lines.append(f"| {name} | {s['vel_error_cms']:.1f} | {s['floor_cm']:.2f} | {s['solve_ms_median']:.2f} |")
+    off = r["site_offsets_off"]
+    lines += ["", "With the detector's site offsets off (13 IMU, HQ): fused "
+              f"{off['fused']['pos_error_cm']:.2f} cm, video-only baseline {off['triangulation']['pos_error_cm']:.2f} cm.",
+              "", "## Omitting terms (paper: ratios to the full cost function)", "",
+              "| terms omitted | 13 IMUs pos. | 13 IMUs ori. | 6 IMUs pos. | 6 IMUs ori. |", "|---|---|---|---|---|"]
+    for name, _ in ABLATIONS:
+        cells = []
+        for imus in ("hq13", "hq6"):
+            a, full = r["ablations"][imus][name], r["ablations"][imus]["full"]
+            cells += [f"{a['pos_error_cm'] / full['pos_error_cm']:.2f}", f"{a['ori_error_deg'] / full['ori_error_deg']:.2f}"]
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines += ["", "## Number of cameras (13 IMU, HQ)", "", "| cameras | " + " | ".join(str(n) for n in r["cameras"]) + " |",
+              "|---|" + "---|" * len(r["cameras"]),
+              "| position (cm) | " + " | ".join(f"{s['pos_error_cm']:.1f}" for s in r["cameras"].values()) + " |",
+              "| orientation (deg) | " + " | ".join(f"{s['ori_error_deg']:.1f}" for s in r["cameras"].values()) + " |",
+              "", "## Detection subsampling (13 IMU, 8 cameras)", "", "| detections on | position (cm) | orientation (deg) | velocity (cm/s) |",
+              "|---|---|---|---|"]
+    for name, s in r["subsampling"].items():
+        lines.append(f"| {name} frames | {s['pos_error_cm']:.1f} | {s['ori_error_deg']:.1f} | {s['vel_error_cms']:.1f} |")
+    lines += ["", "## Targets of issue 3", "", "| target | measured | |", "|---|---|---|"]
+    lines += [f"| {t} | {m} | {'met' if ok else '**missed**'} |" for t, m, ok in targets(r)]
+    lines += ["", "## Plots", "", "![per-joint error](results/per_joint.png)", "", "![error over time](results/over_time.png)", ""]
+    return "\n".join(lines)
+
+
+def targets(r: dict) -> list[tuple[str, str, bool]]:
+    """(target, measured, met) for each accuracy target of issue 3."""
+    c, b, off = r["configurations"], r["baselines"], r["site_offsets_off"]
+    hq, tri, imu = c["hq13"], b["triangulation"], b["imu-only"]
+    a13, a6 = r["ablations"]["hq13"], r["ablations"]["hq6"]
+
+    def worse(a, name):
+        return all(a[n][k] > a["full"][k] for n in (name,) for k in ("pos_error_cm", "ori_error_deg"))
+
+    return [
+        ("13 IMU HQ position within 0.1 cm of floor_cm, or below",
+         f"{hq['pos_error_cm']:.2f} vs {hq['floor_cm']:.2f} cm", hq["pos_error_cm"] <= hq["floor_cm"] + 0.1),
+        ("13 IMU HQ orientation <= 5 deg", f"{hq['ori_error_deg']:.1f} deg", hq["ori_error_deg"] <= 5.0),
+        ("13 IMU HQ velocity error <= half the triangulation baseline's",
+         f"{hq['vel_error_cms']:.0f} vs {tri['vel_error_cms']:.0f} cm/s", hq["vel_error_cms"] <= tri["vel_error_cms"] / 2),
+        ("site offsets off: fused >= 25% below the triangulation baseline",
+         f"{off['fused']['pos_error_cm']:.2f} vs {off['triangulation']['pos_error_cm']:.2f} cm",
+         off["fused"]["pos_error_cm"] <= 0.75 * off["triangulation"]["pos_error_cm"]),
+        ("every fused configuration below the IMU-only orientation error",
+         ", ".join(f"{p} {s['ori_error_deg']:.1f}" for p, s in c.items()) + f" vs {imu['ori_error_deg']:.1f} deg",
+         all(s["ori_error_deg"] < imu["ori_error_deg"] for s in c.values())),
+        ("6 IMU HS velocity error below the triangulation baseline's",
+         f"{c['hs6']['vel_error_cms']:.0f} vs {tri['vel_error_cms']:.0f} cm/s", c["hs6"]["vel_error_cms"] < tri["vel_error_cms"]),
+        ("omitting E_P raises position error at least tenfold (13 and 6 IMUs)",
+         f"x{a13['Pos. (E_P)']['pos_error_cm'] / a13['full']['pos_error_cm']:.0f}, "
+         f"x{a6['Pos. (E_P)']['pos_error_cm'] / a6['full']['pos_error_cm']:.0f}",
+         all(a["Pos. (E_P)"]["pos_error_cm"] >= 10 * a["full"]["pos_error_cm"] for a in (a13, a6))),
+        ("omitting E_R or the prior worsens position and orientation (13 and 6 IMUs)",
+         "see the ablation table", all(worse(a, n) for a in (a13, a6) for n in ("Ori. (E_R)", "Prior (E_PP, E_PD)"))),
+    ]
+
+
+def plots(r: dict, folder: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    joints = list(r["configurations"]["hq13"]["clips"][0]["per_joint"])
+    fig, ax = plt.subplots(figsize=(12, 4))
+    names = list(r["configurations"]) + ["triangulation"]
+    for i, name in enumerate(names):
+        s = r["configurations"].get(name) or r["baselines"][name]
+        err = [np.mean([c["per_joint"][j]["pos_cm"] for c in s["clips"]]) for j in joints]
+        ax.bar(np.arange(len(joints)) + 0.18 * i, err, width=0.18, label=name)
+    ax.set_xticks(np.arange(len(joints)) + 0.36, joints, rotation=60, ha="right")
+    ax.set_ylabel("position error (cm)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "per_joint.png", dpi=100)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(12, 3.5))
+    for name in names:
+        s = r["configurations"].get(name) or r["baselines"][name]
+        ax.plot(s["clips"][0]["pos_error_cm_per_frame"], label=name, lw=1)
+    ax.set_xlabel(f"frame ({_clip_name(r['configurations']['hq13']['clips'][0])}, 60 Hz)")
+    ax.set_ylabel("mean joint position error (cm)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(folder / "over_time.png", dpi=100)
+    plt.close(fig)
+
+
+def compact(r):
+    """The results without per-frame series (they only feed the plots), to 3 decimals."""
+    if isinstance(r, dict):
+        return {k: compact(v) for k, v in r.items() if k != "pos_error_cm_per_frame"}
+    if isinstance(r, list):
+        return [compact(v) for v in r]
+    return round(r, 3) if isinstance(r, float) else r
+
+
+def write(seed: int, docs: Path, command: str) -> dict:
+    r = compute(seed)
+    docs.mkdir(parents=True, exist_ok=True)
+    (docs / "results.md").write_text(markdown(r, command))
+    plots(r, docs / "results")
+    (docs / "results.json").write_text(json.dumps(compact(r)) + "\n")
+    log.info("wrote %s", docs / "results.md")
+    return r
