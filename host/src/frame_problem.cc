@@ -2,6 +2,7 @@
 
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/orientation_residual.h"
+#include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
 #include "mocap/solver.h"
 
@@ -82,6 +83,13 @@ void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3
   auto* cost = new AccelerationResidual(&fk_, site, x1, x0, h1, h2, measured_world, options.weight);
   owned_.emplace_back(cost);
   Add(kAccelerationTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+}
+
+void FrameProblem::AddPointTerm(const Site& site, const Eigen::Vector3d& target,
+                                const TermOptions& options) {
+  auto* cost = new PointResidual(&fk_, site, target, options.weight);
+  owned_.emplace_back(cost);
+  Add(kPointTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
 }
 
 void FrameProblem::AddPriorTerm(Term term, ceres::CostFunction* cost, const TermOptions& options) {

@@ -24,7 +24,8 @@ enum Term {
   kPositionTerm,
   kAccelerationTerm,
   kPcaProjectionTerm,
-  kPcaDeviationTerm
+  kPcaDeviationTerm,
+  kPointTerm  // not one of the paper's five: 3D targets (FitToPoints)
 };
 
 class FrameProblem {
@@ -41,6 +42,7 @@ class FrameProblem {
   void AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3d& x1,
                            const Eigen::Vector3d& x0, double h1, double h2,
                            const Eigen::Vector3d& measured_world, const TermOptions& options);
+  void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
   void AddPriorTerm(Term term, ceres::CostFunction* cost, const TermOptions& options);
 
@@ -59,8 +61,8 @@ class FrameProblem {
   KinematicsCache fk_;
   ceres::Problem problem_;
   std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
-  std::array<std::unique_ptr<ceres::LossFunction>, 5> losses_;
-  std::array<std::vector<ceres::ResidualBlockId>, 5> blocks_;
+  std::array<std::unique_ptr<ceres::LossFunction>, 6> losses_;
+  std::array<std::vector<ceres::ResidualBlockId>, 6> blocks_;
 };
 
 }  // namespace mocap

@@ -130,6 +130,30 @@ void Solver::Reset() {
   last_accel_.assign(imus_.size(), std::nullopt);
 }
 
+bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
+                 const std::vector<Eigen::Vector3d>& targets, const std::vector<double>& weights,
+                 int max_iterations, Eigen::VectorXd* theta) {
+  if (theta->size() != skeleton.pose_dim() || sites.size() != targets.size() ||
+      sites.size() != weights.size()) {
+    return false;
+  }
+  FrameProblem problem(skeleton, theta->data());
+  for (size_t i = 0; i < sites.size(); ++i) {
+    if (!(weights[i] > 0.0) || !std::isfinite(weights[i]) || !targets[i].allFinite() ||
+        sites[i].bone < 0 || sites[i].bone >= skeleton.num_bones()) {
+      continue;
+    }
+    problem.AddPointTerm(sites[i], targets[i],
+                         TermOptions{true, weights[i], LossType::kTrivial, 1.0});
+  }
+  if (problem.count(kPointTerm) == 0) return false;
+  SolverOptions fit;
+  fit.function_tolerance = 1e-6;
+  ceres::Solver::Summary summary;
+  problem.Solve(CeresOptions(fit, max_iterations), &summary);
+  return summary.IsSolutionUsable() && theta->allFinite();
+}
+
 bool Solver::SetOptions(const SolverOptions& options, std::string* error) {
   if (!options.IsValid(error)) return false;
   options_ = options;

@@ -64,6 +64,14 @@ struct SolverOptions {
   bool IsValid(std::string* error) const;
 };
 
+// Fits theta (in place, from its current value) to 3D target points of sites by least
+// squares; targets with a non-positive or non-finite weight (1/m^2) are ignored. Returns
+// false when nothing was fitted. Not one of the paper's terms: it serves the video-only
+// baseline of the evaluation and retargeting.
+bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
+                 const std::vector<Eigen::Vector3d>& targets, const std::vector<double>& weights,
+                 int max_iterations, Eigen::VectorXd* theta);
+
 class Solver {
  public:
   // Returns null and sets *error when an input is inconsistent. prior may be empty:

@@ -17,7 +17,7 @@ import itertools
 
 import numpy as np
 
-from mocap import _core
+from mocap import _core, studio
 from mocap.sim import detector
 
 
@@ -122,19 +122,13 @@ def _first_fit(skeleton, layout, targets, weights) -> np.ndarray:
     for yaw in np.radians([0, 90, 180, 270]):
         theta = np.zeros(skeleton.pose_dim)
         theta[3:6] = [0, 0, yaw]
-        rest = _sites(skeleton, layout, theta)
+        rest = studio.site_positions(skeleton, layout.bones, layout.offsets, theta)
         theta[:3] = np.average(targets[weights > 0] - rest[weights > 0], axis=0)
         ok, theta = _core.fit_to_points(skeleton, layout.bones, layout.offsets, targets, weights, theta, 100)
-        cost = np.sum(weights[:, None] * (_sites(skeleton, layout, theta) - targets) ** 2)
+        cost = np.sum(weights[:, None] * (studio.site_positions(skeleton, layout.bones, layout.offsets, theta) - targets) ** 2)
         if ok and cost < best_cost:
             best, best_cost = theta, cost
     return best if best is not None else np.zeros(skeleton.pose_dim)
-
-
-def _sites(skeleton, layout, theta) -> np.ndarray:
-    rot, pos = skeleton.forward_kinematics(theta)
-    bones = np.asarray(layout.bones)
-    return pos[bones] + np.einsum("kij,kj->ki", rot[bones], np.asarray(layout.offsets))
 
 
 def video_only(take, s: TriangulationSettings = TriangulationSettings()) -> np.ndarray:

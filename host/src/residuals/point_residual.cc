@@ -27,36 +27,4 @@ bool PointResidual::Evaluate(double const* const* parameters, double* residuals,
   return true;
 }
 
-bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
-                 const std::vector<Eigen::Vector3d>& targets, const std::vector<double>& weights,
-                 int max_iterations, Eigen::VectorXd* theta) {
-  if (theta->size() != skeleton.pose_dim() || sites.size() != targets.size() ||
-      sites.size() != weights.size()) {
-    return false;
-  }
-  KinematicsCache fk(&skeleton);
-  ceres::Problem problem;
-  for (int b = 0; b < skeleton.num_bones(); ++b) {
-    problem.AddParameterBlock(theta->data() + BlockOffset(b), BlockSize(b));
-  }
-  int terms = 0;
-  for (size_t i = 0; i < sites.size(); ++i) {
-    if (!(weights[i] > 0.0) || !std::isfinite(weights[i]) || !targets[i].allFinite() ||
-        sites[i].bone < 0 || sites[i].bone >= skeleton.num_bones()) {
-      continue;
-    }
-    problem.AddResidualBlock(new PointResidual(&fk, sites[i], targets[i], weights[i]), nullptr,
-                             ChainBlocks(skeleton, sites[i].bone, theta->data()));
-    ++terms;
-  }
-  if (terms == 0) return false;
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = max_iterations;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  return summary.IsSolutionUsable() && theta->allFinite();
-}
-
 }  // namespace mocap

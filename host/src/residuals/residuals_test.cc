@@ -13,6 +13,7 @@
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
 #include "mocap/so3.h"
+#include "mocap/solver.h"
 #include "synthetic_scene.h"
 
 namespace mocap {

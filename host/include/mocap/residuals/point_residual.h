@@ -4,7 +4,7 @@
 //
 // x_s = p_b + G_b s is the site in world. Used to fit the skeleton to triangulated
 // keypoints (the video-only baseline of the evaluation) and to retarget motion onto a
-// skeleton; dr/dtheta = sqrt(lambda) * dx/dtheta (kinematics.h).
+// skeleton (FitToPoints, solver.h); dr/dtheta = sqrt(lambda) * dx/dtheta (kinematics.h).
 #ifndef MOCAP_RESIDUALS_POINT_RESIDUAL_H_
 #define MOCAP_RESIDUALS_POINT_RESIDUAL_H_
 
@@ -29,12 +29,6 @@ class PointResidual : public ceres::CostFunction {
   Eigen::Vector3d target_;
   double sqrt_weight_;
 };
-
-// Fits theta (in place, from its current value) to target points of sites; targets with
-// a non-positive or non-finite weight are ignored. Returns false when nothing was fitted.
-bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
-                 const std::vector<Eigen::Vector3d>& targets, const std::vector<double>& weights,
-                 int max_iterations, Eigen::VectorXd* theta);
 
 }  // namespace mocap
 
