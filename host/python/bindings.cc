@@ -315,6 +315,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("predict_motion", &SolverOptions::predict_motion)
       .def_readwrite("max_quaternion_error", &SolverOptions::max_quaternion_error)
       .def_readwrite("max_history_gap", &SolverOptions::max_history_gap)
+      .def_readwrite("velocity_gain", &SolverOptions::velocity_gain)
+      .def_readwrite("max_keypoint_cost", &SolverOptions::max_keypoint_cost)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations)
       .def_readwrite("max_initial_iterations", &SolverOptions::max_initial_iterations)
       .def_readwrite("function_tolerance", &SolverOptions::function_tolerance)
@@ -342,6 +344,9 @@ PYBIND11_MODULE(_core, m) {
           [](const SolveResult& r) { return bool(r.flags & kPositionUnconstrained); })
       .def_property_readonly("iteration_limit",
                              [](const SolveResult& r) { return bool(r.flags & kIterationLimit); })
+      .def_property_readonly(
+          "lost_and_reacquired",
+          [](const SolveResult& r) { return bool(r.flags & kLostAndReacquired); })
       .def_property_readonly("costs",
                              [](const SolveResult& r) {
                                const TermCosts& c = r.costs;

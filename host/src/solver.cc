@@ -72,9 +72,10 @@ bool SolverOptions::IsValid(std::string* error) const {
     return false;
   }
   if (!accel_at_rest.allFinite() || !(min_confidence >= 0.0 && min_confidence < 1.0) ||
-      !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) || max_iterations < 1 ||
-      max_initial_iterations < 1 || !(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
-      !(parameter_tolerance >= 0.0)) {
+      !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) ||
+      !(velocity_gain > 0.0 && velocity_gain <= 1.0) || !(max_keypoint_cost > 0.0) ||
+      max_iterations < 1 || max_initial_iterations < 1 || !(function_tolerance >= 0.0) ||
+      !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0)) {
     *error = "solver options out of range";
     return false;
   }
@@ -127,7 +128,8 @@ void Solver::Reset() {
   theta_ = Eigen::VectorXd::Zero(skeleton_.pose_dim());
   initialised_ = false;
   history_.clear();
-  last_accel_.assign(imus_.size(), std::nullopt);
+  motion_.reset();
+  last_fix_.reset();
 }
 
 bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
@@ -167,7 +169,13 @@ void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
   warm_start_given_ = true;
 }
 
-bool Solver::HistoryUsable(double timestamp) const {
+bool Solver::AccelerationUsable(double timestamp, bool reacquiring) const {
+  if (!motion_ || reacquiring) return false;
+  const double h2 = timestamp - motion_->timestamp;
+  return h2 > 0.0 && h2 <= options_.max_history_gap;
+}
+
+bool Solver::PredictionUsable(double timestamp) const {
   if (history_.size() < 2) return false;
   const double h1 = history_[1].timestamp - history_[0].timestamp;
   const double h2 = timestamp - history_[1].timestamp;
@@ -176,7 +184,7 @@ bool Solver::HistoryUsable(double timestamp) const {
 }
 
 Eigen::VectorXd Solver::WarmStart(double timestamp) const {
-  if (!options_.predict_motion || warm_start_given_ || !HistoryUsable(timestamp)) return theta_;
+  if (!options_.predict_motion || warm_start_given_ || !PredictionUsable(timestamp)) return theta_;
   const SolvedFrame& a = history_[0];
   const SolvedFrame& b = history_[1];
   const double s = (timestamp - b.timestamp) / (b.timestamp - a.timestamp);
@@ -190,16 +198,41 @@ Eigen::VectorXd Solver::WarmStart(double timestamp) const {
   return x;
 }
 
-void Solver::Remember(const CleanFrame& frame, bool position_constrained) {
+void Solver::Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity) {
+  if (history_.size() == 2) history_.erase(history_.begin());
+  history_.push_back({frame.timestamp, theta_, position_constrained});
+
   BodyPose pose;
   ForwardKinematics(skeleton_, theta_.data(), &pose);
-  SolvedFrame solved{frame.timestamp, theta_, {}, position_constrained};
+  MotionState next;
+  next.timestamp = frame.timestamp;
+  next.accel = frame.accel_world;
+  next.velocity.assign(imus_.size(), std::nullopt);
   for (const ImuSite& s : imus_) {
-    solved.imu_sites.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
+    next.position.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
   }
-  if (history_.size() == 2) history_.erase(history_.begin());
-  history_.push_back(std::move(solved));
-  last_accel_ = frame.accel_world;
+  const bool reacquired = continuity == Continuity::kReacquired;
+  const double h2 = motion_ ? frame.timestamp - motion_->timestamp : 0.0;
+  if (continuity != Continuity::kRestarted && h2 > 0.0 && h2 <= options_.max_history_gap) {
+    next.step = h2;
+    // A re-acquisition jump is drift since the last keypoints (none: no velocity evidence).
+    const double gain = !reacquired ? options_.velocity_gain
+                        : last_fix_ ? h2 / (frame.timestamp - *last_fix_)
+                                    : 0.0;
+    for (size_t i = 0; i < imus_.size(); ++i) {
+      const Eigen::Vector3d raw = (next.position[i] - motion_->position[i]) / h2;
+      const std::optional<Eigen::Vector3d>& v = motion_->velocity[i];
+      if (!v) {
+        if (!reacquired) next.velocity[i] = raw;  // a jump is no velocity
+        continue;
+      }
+      Eigen::Vector3d predicted = *v;
+      if (motion_->accel[i]) predicted += *motion_->accel[i] * 0.5 * (motion_->step + h2);
+      next.velocity[i] = predicted + gain * (raw - predicted);
+    }
+  }
+  motion_ = std::move(next);
+  if (position_constrained) last_fix_ = frame.timestamp;
 }
 
 void Solver::UpdatePriorResiduals() {
@@ -216,7 +249,7 @@ void Solver::UpdatePriorResiduals() {
 }
 
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
-                      Eigen::VectorXd* x, SolveResult* result) const {
+                      bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
   FrameProblem problem(skeleton_, x->data());
   if (Active(options_.position)) {
     TermOptions position = options_.position;
@@ -224,16 +257,17 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
-  const bool accel_ready = HistoryUsable(frame.timestamp);
-  const double h2 = accel_ready ? frame.timestamp - history_[1].timestamp : 0.0;
-  const double h1 = accel_ready ? history_[1].timestamp - history_[0].timestamp : 0.0;
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (frame.imu_world[i] && Active(options_.orientation)) {
       problem.AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
     }
-    if (accel_ready && last_accel_[i] && Active(options_.acceleration)) {
-      problem.AddAccelerationTerm(imus_[i], history_[1].imu_sites[i], history_[0].imu_sites[i], h1,
-                                  h2, *last_accel_[i], options_.acceleration);
+    if (use_acceleration && motion_->velocity[i] && motion_->accel[i] &&
+        Active(options_.acceleration)) {
+      // The previous step's velocity stands in for x(t0): x(t1) - v h1 (MotionState).
+      const Eigen::Vector3d& x1 = motion_->position[i];
+      problem.AddAccelerationTerm(imus_[i], x1, x1 - *motion_->velocity[i] * motion_->step,
+                                  motion_->step, frame.timestamp - motion_->timestamp,
+                                  *motion_->accel[i], options_.acceleration);
     }
   }
   if (pca_projection_ && Active(options_.pca_projection)) {
@@ -266,7 +300,7 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   }
   if (summary.termination_type == ceres::NO_CONVERGENCE) result->flags |= kIterationLimit;
   if (problem.count(kPositionTerm) == 0) result->flags |= kPositionUnconstrained;
-  if (!accel_ready) result->flags |= kAccelerationUnavailable;
+  if (problem.count(kAccelerationTerm) == 0) result->flags |= kAccelerationUnavailable;
   result->costs = problem.Costs();
   return true;
 }
@@ -310,20 +344,39 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   const bool reacquiring = !initialising && !clean.detections.empty() && !history_.empty() &&
                            !history_.back().position_constrained;
   const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
-  if (initialising || reacquiring) {
-    // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the
-    // Cauchy loss would treat their large errors as outliers.
+  // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the Cauchy
+  // loss would treat their large errors as outliers.
+  auto coarse_pass = [&]() {
     SolveResult coarse = result;
-    if (!Optimise(clean, iterations, kCoarseLossBoost, &x, &coarse)) {
-      return finish(SolveStatus::kFailed, coarse.message);
-    }
+    const bool ok = Optimise(clean, iterations, kCoarseLossBoost, false, &x, &coarse);
+    if (!ok) result.message = coarse.message;
+    return ok;
+  };
+  if ((initialising || reacquiring) && !coarse_pass()) {
+    return finish(SolveStatus::kFailed, result.message);
   }
-  if (!Optimise(clean, iterations, 1.0, &x, &result)) {
+  const Eigen::VectorXd warm_start = x;
+  if (!Optimise(clean, iterations, 1.0, AccelerationUsable(frame.timestamp, reacquiring), &x,
+                &result)) {
     return finish(result.status, result.message);
+  }
+  // The tracked pose lost the keypoints (they sit in the loss's tail, outvoted by the motion
+  // terms): re-acquire it from the keypoints, and forget the velocities that carried it off.
+  Continuity continuity = reacquiring ? Continuity::kReacquired : Continuity::kContinuous;
+  if (!initialising && !reacquiring && result.counts.keypoints_used > 0 &&
+      result.costs.position > options_.max_keypoint_cost * result.counts.keypoints_used) {
+    x = warm_start;
+    SolveResult again = result;
+    again.flags = 0;
+    if (coarse_pass() && Optimise(clean, iterations, 1.0, false, &x, &again)) {
+      result = again;
+      result.flags |= kLostAndReacquired;
+      continuity = Continuity::kRestarted;
+    }
   }
   theta_ = x;
   initialised_ = true;
-  Remember(clean, !(result.flags & kPositionUnconstrained));
+  Remember(clean, !(result.flags & kPositionUnconstrained), continuity);
   return finish(initialising ? SolveStatus::kInitialised : SolveStatus::kOk, "");
 }
 

@@ -51,6 +51,7 @@ enum QualityFlag : uint32_t {
   kPositionUnconstrained = 1u << 0,    // no camera constrained the pose: global position drifts
   kIterationLimit = 1u << 1,           // stopped at the iteration limit, not by convergence
   kAccelerationUnavailable = 1u << 2,  // no acceleration history (first frames, after a gap)
+  kLostAndReacquired = 1u << 3,        // the tracked pose had lost the keypoints: re-acquired
 };
 
 // Per-term cost E = sum of rho(|r|^2) at the solution, as on the slide.

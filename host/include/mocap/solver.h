@@ -38,9 +38,10 @@ struct SolverOptions {
   // Weights: 1 / (typical error)^2 of each measurement, so a typical error costs ~1.
   TermOptions orientation{true, 1.0 / (0.035 * 0.035), LossType::kCauchy, 4.0};  // 2 degrees
   TermOptions position{true, 1.0 / 25.0, LossType::kCauchy, 1.0};                // 5 pixels
-  // E_A compares the measured acceleration with the second difference of solved
-  // positions, whose own jitter (~5 mm at 60 Hz) is ~20 m/s^2: hence a soft 30 m/s^2.
-  TermOptions acceleration{true, 1.0 / (30.0 * 30.0), LossType::kCauchy, 1.0};
+  // E_A compares the measured acceleration with the second difference of the solved
+  // positions, whose previous velocity is filtered (velocity_gain): 18 m/s^2 and the gain
+  // 0.3 were tuned on the validation clips (docs/results.md, "Tuning").
+  TermOptions acceleration{true, 1.0 / (18.0 * 18.0), LossType::kCauchy, 1.0};
   TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
   // One standard deviation of the prior costs as much as a keypoint at its typical error;
   // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander (issue 3 eval).
@@ -50,6 +51,14 @@ struct SolverOptions {
   double min_confidence = 0.05;                  // detections at or below are "not detected"
   double max_quaternion_error = 1e-3;            // | |q| - 1 | above this: the reading is rejected
   double max_history_gap = 0.25;  // s: older solved frames do not feed E_A or prediction
+  // E_A's previous velocity of each IMU site (see MotionState): 1 takes the difference of
+  // the last two solutions, as the slide's second difference; below 1, a complementary
+  // filter of that difference and the velocity integrated from the accelerometers.
+  double velocity_gain = 0.3;
+  // Mean robust cost per keypoint (rho, in the position loss's units) above which the
+  // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
+  // tracked pose scores ~1.1, one carried off by the motion terms 4-8 (issue 3 eval).
+  double max_keypoint_cost = 2.5;
   // Warm start from a constant-velocity prediction of the two previous solutions (on
   // SO(3) per joint) instead of the previous solution alone.
   bool predict_motion = true;
@@ -103,17 +112,35 @@ class Solver {
   struct SolvedFrame {
     double timestamp;
     Eigen::VectorXd theta;
-    std::vector<Eigen::Vector3d> imu_sites;  // world positions of each IMU site
-    bool position_constrained;               // keypoints took part in the solve
+    bool position_constrained;  // keypoints took part in the solve
   };
-  // The two previous solves, within max_history_gap of each other and of `timestamp`, in
-  // one regime (both with keypoints, or both without): across a change of regime, their
-  // difference holds the re-acquisition jump, not the motion, and extrapolating it (E_A,
-  // the warm-start prediction) runs away.
-  bool HistoryUsable(double timestamp) const;
+  // What E_A knows of each IMU site's motion at the newest solved frame t1:
+  //   x(t1), the measured acceleration a(t1), and v, the site's mean velocity over the
+  //   step [t1 - h1, t1] (absent until two frames were solved in a row).
+  // After a frame at t (h2 = t - t1): v_pred = v + a(t1) (h1 + h2) / 2, the raw velocity
+  // (x(t) - x(t1)) / h2, and v <- v_pred + g (raw - v_pred) with g = velocity_gain. When
+  // keypoints return after frames without them (re-acquisition), the jump is the drift of
+  // the dead reckoning since the last keypoints at t_fix: g = h2 / (t - t_fix) spreads it
+  // over that time, so the velocity is corrected rather than the jump taken for motion.
+  struct MotionState {
+    double timestamp = 0, step = 0;  // t1, h1 (s)
+    std::vector<Eigen::Vector3d> position;
+    std::vector<std::optional<Eigen::Vector3d>> velocity, accel;
+  };
+  // E_A applies at `timestamp` (the state is within max_history_gap, no re-acquisition).
+  bool AccelerationUsable(double timestamp, bool reacquiring) const;
+  // The two previous solves feed the warm-start prediction when they lie within
+  // max_history_gap of each other and of `timestamp`, in one regime (both with keypoints,
+  // or both without): across a change of regime their difference holds the re-acquisition
+  // jump, not the motion.
+  bool PredictionUsable(double timestamp) const;
 
   Solver() = default;
-  void Remember(const CleanFrame& frame, bool position_constrained);
+  // How a solve continues the previous: tracked, re-acquired after frames without
+  // keypoints (the jump is drift), or restarted after the keypoints were lost (the motion
+  // state's velocities are forgotten).
+  enum class Continuity { kContinuous, kReacquired, kRestarted };
+  void Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity);
   // (Re)builds the prior terms' constant matrices when their weights changed.
   void UpdatePriorResiduals();
   // The warm start of a frame at `timestamp`.
@@ -121,7 +148,7 @@ class Solver {
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in
   // *result) when nothing constrains the pose or the optimiser fails.
   bool Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
-                Eigen::VectorXd* x, SolveResult* result) const;
+                bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const;
 
   Skeleton skeleton_;
   Rig rig_;
@@ -134,8 +161,8 @@ class Solver {
   bool initialised_ = false;
   bool warm_start_given_ = false;     // SetWarmStart since the last solve: no prediction
   std::vector<SolvedFrame> history_;  // up to two previous solved frames, newest last
-  // Measured world acceleration a(t1) of each IMU at the newest solved frame.
-  std::vector<std::optional<Eigen::Vector3d>> last_accel_;
+  std::optional<MotionState> motion_;
+  std::optional<double> last_fix_;  // time of the newest solve with keypoints
   std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
   double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
 };

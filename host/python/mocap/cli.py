@@ -51,7 +51,7 @@ def _train_prior(args: argparse.Namespace) -> int:
 
     from mocap import prior
 
-    exclude = set() if args.include_test else prior.test_clips(Path(args.split))
+    exclude = set() if args.include_test else prior.held_out_clips(Path(args.split))
     result, info = prior.train(Path(args.bvh), rate=args.rate, exclude=exclude, variance=args.variance,
                                clusters=args.clusters or None, seed=args.seed)
     prior.save(result, Path(args.out), info)
@@ -119,8 +119,8 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--bvh", required=True, help="folder of BVH files (searched recursively)")
     t.add_argument("--out", required=True, help="prior JSON to write")
     t.add_argument("--split", default=str(paths.HOST_DATA / "motion_split.json"),
-                   help="split file whose 'test' clips are left out (default: the shipped one)")
-    t.add_argument("--include-test", action="store_true", help="train on the test clips too")
+                   help="split file whose 'test' and 'validation' clips are left out (default: the shipped one)")
+    t.add_argument("--include-test", action="store_true", help="train on the test and validation clips too")
     t.add_argument("--rate", type=float, default=60.0, help="resample clips to this rate, Hz (default 60)")
     t.add_argument("--clusters", type=int, default=500, help="k-means clusters, 0 for none (default 500)")
     t.add_argument("--variance", type=float, default=0.95, help="fraction of variance kept (default 0.95)")

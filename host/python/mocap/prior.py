@@ -56,8 +56,18 @@ def fit(poses: np.ndarray, variance: float = 0.95, clusters: int | None = 500, s
 
 
 def test_clips(split: Path = SPLIT) -> set[str]:
-    """Clips (paths relative to the mocap data folder) kept out of training."""
+    """Clips (paths relative to the mocap data folder) scored in docs/results.md."""
     return set(json.loads(split.read_text())["test"])
+
+
+def validation_clips(split: Path = SPLIT) -> set[str]:
+    """Clips where solver settings are tuned: neither trained on nor scored."""
+    return set(json.loads(split.read_text()).get("validation", []))
+
+
+def held_out_clips(split: Path = SPLIT) -> set[str]:
+    """Clips kept out of training: the test and the validation clips."""
+    return test_clips(split) | validation_clips(split)
 
 
 def train(folder: Path, rate: float = 60.0, exclude: set[str] = frozenset(), **fit_args) -> tuple[_core.PosePrior, dict]:

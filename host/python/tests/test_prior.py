@@ -39,8 +39,9 @@ def test_keeps_the_requested_share_of_variance():
 
 def test_shipped_prior_is_trained_on_the_train_split_and_reproducible(shared):
     shipped = json.loads(prior.DEFAULT.read_text())
-    assert not set(shipped["training"]["clips"]) & prior.test_clips()
-    retrained, info = prior.train(shared / "data/mocap", exclude=prior.test_clips())
+    assert not set(shipped["training"]["clips"]) & prior.held_out_clips()
+    assert prior.test_clips() and prior.validation_clips() and not prior.test_clips() & prior.validation_clips()
+    retrained, info = prior.train(shared / "data/mocap", exclude=prior.held_out_clips())
     assert info["clips"] == shipped["training"]["clips"]
     np.testing.assert_allclose(retrained.mean, shipped["mean"], atol=1e-9)
     # Components are defined up to sign.

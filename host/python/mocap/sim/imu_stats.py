@@ -3,8 +3,9 @@
 handheld/sensor_data.csv (gyroscope deg/s, accelerometer g, ~100 Hz): stationary blocks
 are runs of at least 2 s whose gyroscope magnitude stays under 1 deg/s; per block, the
 accelerometer's standard deviation per axis (white noise) and |a| - g (bias along gravity).
-xsens-mtw-walking/*.txt (accelerometer m/s^2, 100 Hz): per sensor, the standard deviation
-per axis over its quietest 0.5 s window (the smallest spread of |a|).
+xsens-mtw-walking/*.txt (accelerometer m/s^2, orientation matrix, 100 Hz): per sensor,
+over its quietest 0.5 s window (the smallest spread of |a|), the accelerometer's standard
+deviation per axis and the median rotation from one orientation sample to the next.
 """
 
 from __future__ import annotations
@@ -40,8 +41,13 @@ def xsens(folder: Path, window: int = 50) -> dict:
         norm = np.linalg.norm(acc, axis=1)
         starts = range(0, len(acc) - window, window)
         best = min(starts, key=lambda i: norm[i:i + window].std())
+        mats = np.stack([data[f"Mat{i}{j}"] for i in (1, 2, 3) for j in (1, 2, 3)], axis=1).reshape(-1, 3, 3)
+        quiet = mats[best:best + window]
+        cos = (np.einsum("fij,fij->f", quiet[:-1], quiet[1:]) - 1.0) / 2.0  # trace(A^T B) = 1 + 2 cos
         out[path.stem.split("_")[-1]] = {"accel_noise_ms2": acc[best:best + window].std(axis=0).round(4).tolist(),
-                                         "accel_norm_ms2": round(float(norm[best:best + window].mean()), 4)}
+                                         "accel_norm_ms2": round(float(norm[best:best + window].mean()), 4),
+                                         "orientation_step_deg": round(float(np.median(np.degrees(
+                                             np.arccos(np.clip(cos, -1.0, 1.0))))), 4)}
     return out
 
 
