@@ -356,6 +356,7 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     return finish(SolveStatus::kFailed, result.message);
   }
   const Eigen::VectorXd warm_start = x;
+  const SolveResult before_fine_pass = result;
   if (!Optimise(clean, iterations, 1.0, AccelerationUsable(frame.timestamp, reacquiring), &x,
                 &result)) {
     return finish(result.status, result.message);
@@ -365,13 +366,15 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   Continuity continuity = reacquiring ? Continuity::kReacquired : Continuity::kContinuous;
   if (!initialising && !reacquiring && result.counts.keypoints_used > 0 &&
       result.costs.position > options_.max_keypoint_cost * result.counts.keypoints_used) {
+    const Eigen::VectorXd tracked = x;
     x = warm_start;
-    SolveResult again = result;
-    again.flags = 0;
+    SolveResult again = before_fine_pass;
     if (coarse_pass() && Optimise(clean, iterations, 1.0, false, &x, &again)) {
       result = again;
       result.flags |= kLostAndReacquired;
       continuity = Continuity::kRestarted;
+    } else {
+      x = tracked;  // the re-acquisition failed: keep the tracked solution
     }
   }
   theta_ = x;

@@ -7,7 +7,7 @@ smooth), white noise of 0.02 deg per sample, a slow heading drift (random walk, 
 deg/sqrt(min)), and soft-tissue wobble: the sensor housing turns on the skin by 0.3 deg
 per m/s^2 of the site's acceleration, about the axis normal to it and the bone, up to 8 deg (the
 accelerometer turns with it). The real MTw recordings change
-by 0.01-0.02 deg from one 100 Hz sample to the next at rest (`mocap imu-stats`): white
+by 0.002-0.017 deg (median) from one 100 Hz sample to the next at rest (`mocap imu-stats`): white
 noise at the spec's 0.75-1.5 deg per frame would be fifty times too rough, and would
 show as jitter no real suit has.
 Acceleration = second derivative of the sensor site + gravity's reaction, in the sensor

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap import rotations
+
 G = 9.80665  # m/s^2
 
 
@@ -43,11 +45,10 @@ def xsens(folder: Path, window: int = 50) -> dict:
         best = min(starts, key=lambda i: norm[i:i + window].std())
         mats = np.stack([data[f"Mat{i}{j}"] for i in (1, 2, 3) for j in (1, 2, 3)], axis=1).reshape(-1, 3, 3)
         quiet = mats[best:best + window]
-        cos = (np.einsum("fij,fij->f", quiet[:-1], quiet[1:]) - 1.0) / 2.0  # trace(A^T B) = 1 + 2 cos
+        step = np.degrees(rotations.angle_between(quiet[:-1], quiet[1:]))
         out[path.stem.split("_")[-1]] = {"accel_noise_ms2": acc[best:best + window].std(axis=0).round(4).tolist(),
                                          "accel_norm_ms2": round(float(norm[best:best + window].mean()), 4),
-                                         "orientation_step_deg": round(float(np.median(np.degrees(
-                                             np.arccos(np.clip(cos, -1.0, 1.0))))), 4)}
+                                         "orientation_step_deg": round(float(np.median(step)), 4)}
     return out
 
 
