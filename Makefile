@@ -1,6 +1,6 @@
 # The project's commands. See README.md.
 PY     := $(CURDIR)/.venv/bin/python
-BUILD  := build/host
+BUILD  := build
 
 .PHONY: setup build test bench lint clean
 
@@ -9,7 +9,7 @@ setup:            ## install Debian + pinned PyPI dependencies, create .venv (id
 
 build:            ## configure and build the C++ host library, tests and Python bindings
 	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
-	cmake -S host -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
+	cmake -S . -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
 	cmake --build $(BUILD)
 
 test: build       ## every test of every part

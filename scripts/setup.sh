@@ -7,6 +7,7 @@ cd "$(dirname "$0")/.."
 DEBIAN_PACKAGES=(
   build-essential cmake ninja-build pkg-config clang-format
   libceres-dev libeigen3-dev nlohmann-json3-dev pybind11-dev libgtest-dev
+  protobuf-compiler libprotobuf-dev libzmq3-dev cppzmq-dev
   python3 python3-dev python3-venv
 )
 
