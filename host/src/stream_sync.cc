@@ -22,14 +22,14 @@ bool StreamSynchroniser::Active(const StreamCounts& counts, int64_t now_ns) cons
   return counts.last_arrival_ns && now_ns - *counts.last_arrival_ns <= options_.stale_after_ns;
 }
 
-void StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
+bool StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
   CameraStream& stream = cameras_[input.camera];
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
   const int64_t t = input.time_ns;
   if (last_released_ns_ && t <= *last_released_ns_ + options_.group_tolerance_ns) {
     stream.counts.late++;
-    return;
+    return false;
   }
   auto it = std::find_if(pending_.begin(), pending_.end(), [&](const Group& g) {
     return std::abs(g.time_ns - t) <= options_.group_tolerance_ns;
@@ -41,16 +41,17 @@ void StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
                          std::move(group));
   } else if (it->cameras[input.camera]) {
     stream.counts.duplicates++;
-    return;
+    return false;
   }
   if (stream.newest_ns && t < *stream.newest_ns) stream.counts.out_of_order++;
   stream.newest_ns = std::max(stream.newest_ns.value_or(t), t);
   it->last_input_ns = std::max(it->last_input_ns, now_ns);
   const int c = input.camera;
   it->cameras[c] = std::move(input);
+  return true;
 }
 
-void StreamSynchroniser::AddImu(const ImuInput& input, int64_t now_ns) {
+bool StreamSynchroniser::AddImu(const ImuInput& input, int64_t now_ns) {
   ImuStream& stream = imus_[input.imu];
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
@@ -60,17 +61,18 @@ void StreamSynchroniser::AddImu(const ImuInput& input, int64_t now_ns) {
                              [](const Sample& s, int64_t v) { return s.input.time_ns < v; });
   if (at != samples.end() && at->input.time_ns == t) {
     stream.counts.duplicates++;
-    return;
+    return false;
   }
   if (at != samples.end()) stream.counts.out_of_order++;
   // A sample older than what the released frames could still use is of no use.
   if (last_released_ns_ && t < *last_released_ns_ - options_.imu_max_gap_ns) {
     stream.counts.late++;
-    return;
+    return false;
   }
   samples.insert(at, Sample{input, now_ns});
   const int64_t keep_from = samples.back().input.time_ns - options_.imu_history_ns;
   while (samples.size() > 2 && samples.front().input.time_ns < keep_from) samples.pop_front();
+  return true;
 }
 
 bool StreamSynchroniser::Complete(const Group& group, int64_t now_ns) const {

@@ -71,9 +71,10 @@ class StreamSynchroniser {
  public:
   StreamSynchroniser(int num_cameras, int num_imus, SyncOptions options);
 
-  // Indices must be in range (the caller maps names and counts unknown ones).
-  void AddCamera(CameraInput input, int64_t now_ns);
-  void AddImu(const ImuInput& input, int64_t now_ns);
+  // Indices must be in range (the caller maps names and counts unknown ones). False when
+  // the input was dropped (late or duplicate; counted in the stream's counts).
+  bool AddCamera(CameraInput input, int64_t now_ns);
+  bool AddImu(const ImuInput& input, int64_t now_ns);
   // Frames ready at now_ns, oldest first.
   std::vector<SyncedFrame> TakeReady(int64_t now_ns);
 

@@ -1,0 +1,158 @@
+// The host pipeline on messages rendered from a synthetic studio: poses follow the
+// streams, bad messages are counted and dropped, stopped streams degrade and recover.
+#include "pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "synthetic_scene.h"
+
+namespace mocap {
+namespace {
+
+using testing::MakeScene;
+using testing::Scene;
+
+constexpr int64_t kT0 = 1'763'900'000'000'000'000;
+constexpr int64_t kFrame = 16'666'667;
+constexpr int64_t kMs = 1'000'000;
+
+struct Studio {
+  Scene scene = MakeScene(4);
+  std::vector<Eigen::VectorXd> poses;
+  Studio() {
+    std::mt19937 rng(3);
+    const Eigen::VectorXd a = testing::RandomPose(scene.skeleton, &rng, 0.3);
+    const Eigen::VectorXd b = testing::RandomPose(scene.skeleton, &rng, 0.3);
+    for (int k = 0; k < 90; ++k) poses.push_back(a + (b - a) * (k / 89.0));
+  }
+  std::unique_ptr<HostPipeline> Pipeline() const {
+    Session s;
+    s.skeleton = scene.skeleton, s.rig = scene.rig, s.layout = scene.layout, s.imus = scene.imus;
+    std::string error;
+    auto p = HostPipeline::Create(s, &error);
+    EXPECT_TRUE(p) << error;
+    return p;
+  }
+  std::string Keypoints(int k, int c) const {
+    const FrameObservations obs = testing::Render(scene, poses[k], 0);
+    v1::KeypointFrame f;
+    f.set_camera_id(scene.rig.cameras[c].name);
+    f.set_frame_index(k);
+    f.set_capture_time_ns(kT0 + k * kFrame);
+    f.set_keypoint_layout(scene.layout.name);
+    f.set_detected(true);
+    auto* decoy = f.add_persons();  // a bystander, shifted by 300 px
+    auto* p = f.add_persons();
+    for (const Keypoint2D& kp : obs.cameras[c].keypoints) {
+      p->add_x(kp.x), p->add_y(kp.y), p->add_confidence(kp.confidence);
+      decoy->add_x(kp.x + 300), decoy->add_y(kp.y), decoy->add_confidence(0.5);
+    }
+    return f.SerializeAsString();
+  }
+  std::string Imus(int k, const std::string& skip = "") const {
+    const FrameObservations obs = testing::Render(scene, poses[k], 0);
+    v1::ImuBatch b;
+    b.set_hub_id("hub0");
+    b.set_sequence(k);
+    for (const ImuObservation& o : obs.imus) {
+      if (scene.imus[o.imu].name == skip) continue;
+      v1::ImuSample* s = b.add_samples();
+      s->set_sensor_id(scene.imus[o.imu].name);
+      s->set_sample_time_ns(kT0 + k * kFrame);
+      s->set_qw(o.orientation.w()), s->set_qx(o.orientation.x()), s->set_qy(o.orientation.y()), s->set_qz(o.orientation.z());
+      s->set_status(v1::ImuSample::STATUS_ACCELERATION_INVALID);  // Render gives no accelerations
+      s->set_packet_counter(k);
+    }
+    return b.SerializeAsString();
+  }
+};
+
+TEST(Pipeline, PosesFollowTheStreamsAndBadMessagesAreCountedAndDropped) {
+  Studio studio;
+  auto pipeline = studio.Pipeline();
+  std::vector<SolvedFrame> out;
+  for (int k = 0; k < 40; ++k) {
+    const int64_t now = kT0 + k * kFrame + kMs;
+    EXPECT_TRUE(pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now));
+    for (int c = 0; c < 4; ++c) EXPECT_TRUE(pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now));
+    if (k == 10) {  // garbage of every kind, between good messages
+      v1::KeypointFrame nan_frame;
+      nan_frame.ParseFromString(studio.Keypoints(k + 1, 0));
+      nan_frame.mutable_persons(1)->set_x(3, NAN);
+      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", nan_frame.SerializeAsString(), now));
+      EXPECT_FALSE(pipeline->Feed("mocap.v2.KeypointFrame", studio.Keypoints(k + 1, 0), now));
+      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", "\x12\x34garbage", now));
+      v1::KeypointFrame stranger;
+      stranger.ParseFromString(studio.Keypoints(k + 1, 0));
+      stranger.set_camera_id("cam99");
+      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", stranger.SerializeAsString(), now));
+      stranger.set_camera_id(studio.scene.rig.cameras[0].name);
+      stranger.set_keypoint_layout("coco17");
+      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", stranger.SerializeAsString(), now));
+      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k - 5, 1), now));  // late
+    }
+    for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
+  }
+  ASSERT_EQ(out.size(), 40u);
+  for (size_t k = 0; k < out.size(); ++k) {
+    const v1::PoseFrame& p = out[k].pose;
+    EXPECT_EQ(p.capture_time_ns(), kT0 + static_cast<int64_t>(k) * kFrame);
+    EXPECT_EQ(p.cameras_size(), 4);
+    EXPECT_EQ(p.imus_size(), 13);
+    const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
+    if (k >= 2) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.01) << k;
+  }
+  const auto& dropped = pipeline->dropped();
+  EXPECT_EQ(dropped.at("not_finite"), 1u);
+  EXPECT_EQ(dropped.at("wrong_version"), 1u);
+  EXPECT_EQ(dropped.at("undecodable"), 1u);
+  EXPECT_EQ(dropped.at("unknown_source"), 1u);
+  EXPECT_EQ(dropped.at("invalid"), 1u);
+  const v1::Health health = pipeline->Health(kT0 + 40 * kFrame);
+  EXPECT_EQ(health.frames_solved(), 40u);
+  EXPECT_EQ(health.streams(1).stream(), "camera/" + studio.scene.rig.cameras[1].name);
+  EXPECT_EQ(health.streams(1).late(), 1u);
+}
+
+TEST(Pipeline, AStoppedCameraOrImuDegradesTheSolveWhichRecoversWhenItReturns) {
+  Studio studio;
+  auto pipeline = studio.Pipeline();
+  std::vector<SolvedFrame> out;
+  const auto off = [](int k) { return k >= 25 && k < 60; };  // camera 2 and the lower-back IMU unplugged
+  for (int k = 0; k < 90; ++k) {
+    const int64_t now = kT0 + k * kFrame + kMs;
+    pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k, off(k) ? "lower_back" : ""), now);
+    for (int c = 0; c < 4; ++c) {
+      if (!(c == 2 && off(k))) pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
+    }
+    for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
+  }
+  ASSERT_GE(out.size(), 89u);  // the last may wait for its deadline
+  for (size_t k = 2; k < out.size(); ++k) {
+    const v1::PoseFrame& p = out[k].pose;
+    const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
+    EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.01) << k;
+    EXPECT_EQ(p.cameras_size(), off(static_cast<int>(k)) ? 3 : 4) << k;
+    EXPECT_EQ(p.imus_size(), off(static_cast<int>(k)) ? 12 : 13) << k;
+    // Frames wait for the stopped camera only until it is stale (300 ms), never after.
+    const int64_t waited = out[k].last_input_ns - (kT0 + static_cast<int64_t>(k) * kFrame);
+    if (k < 25 || k > 50) EXPECT_LE(waited, kFrame + kMs) << k;
+  }
+}
+
+TEST(Pipeline, ASessionFileThatIsWrongSaysWhat) {
+  Session s;
+  std::string error;
+  EXPECT_FALSE(LoadSession("/nonexistent/session.json", &s, &error));
+  EXPECT_NE(error.find("/nonexistent/session.json"), std::string::npos);
+  const std::string path = ::testing::TempDir() + "/session.json";
+  std::ofstream(path) << R"({"format": "mocap.session/1", "skeleton": ")" << testing::DataPath("skeleton_default.json")
+                      << R"(", "rig": "missing_rig.json", "layout": "x", "imus": "y", "inputs": [], "output": ""})";
+  EXPECT_FALSE(LoadSession(path, &s, &error));
+  EXPECT_NE(error.find("missing_rig.json"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace mocap

@@ -1,0 +1,39 @@
+// The host's session file: what the daemon solves and where the streams are.
+//   {"format": "mocap.session/1",
+//    "skeleton": path, "rig": path, "layout": path, "imus": path, "prior": path or null,
+//    "inputs": ["tcp://edge-box-1:5600", ...],   // every edge box and IMU hub (PUB, bound there)
+//    "output": "tcp://*:5700",                  // where PoseFrame and Health are published
+//    "sync": {"group_tolerance_ms": 4, "max_wait_ms": 25, "stale_after_ms": 300,
+//             "imu_max_gap_ms": 40, "imu_max_hold_ms": 15, "imu_only_rate_hz": 60},
+//    "solver": {"function_tolerance": 1e-3, "max_iterations": 10, "predict_motion": true}}
+// Paths are relative to the session file. Camera ids on the wire are the rig's camera
+// names, sensor ids the IMU set's names. Missing "sync" / "solver" keys keep the defaults.
+#ifndef MOCAP_DAEMON_SESSION_H_
+#define MOCAP_DAEMON_SESSION_H_
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mocap/solver.h"
+#include "mocap/stream_sync.h"
+
+namespace mocap {
+
+struct Session {
+  Skeleton skeleton;
+  Rig rig;
+  KeypointLayout layout;  // scaled to the skeleton
+  std::vector<ImuSite> imus;
+  std::optional<PosePrior> prior;
+  SolverOptions solver;
+  SyncOptions sync;
+  std::vector<std::string> inputs;
+  std::string output;
+};
+
+bool LoadSession(const std::string& path, Session* out, std::string* error);
+
+}  // namespace mocap
+
+#endif  // MOCAP_DAEMON_SESSION_H_

@@ -1,0 +1,106 @@
+#include "wire.h"
+
+#include <cmath>
+#include <initializer_list>
+
+#include "mocap/v1/health.pb.h"
+#include "mocap/v1/imu_batch.pb.h"
+#include "mocap/v1/keypoint_frame.pb.h"
+#include "mocap/v1/pose_frame.pb.h"
+
+namespace mocap::wire {
+namespace {
+
+template <typename Values>
+bool AllFinite(const Values& values) {
+  for (double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+// Content checks of a parsed message; sets *detail and returns the reason on failure.
+DropReason Check(const v1::KeypointFrame& m, std::string* detail) {
+  if (m.camera_id().empty()) return *detail = "KeypointFrame without camera_id", DropReason::kInvalid;
+  for (const auto& p : m.persons()) {
+    if (p.x_size() != p.y_size() || p.x_size() != p.confidence_size()) {
+      *detail = m.camera_id() + ": x, y, confidence of different lengths";
+      return DropReason::kInvalid;
+    }
+    if (!AllFinite(p.x()) || !AllFinite(p.y()) || !AllFinite(p.confidence())) {
+      *detail = m.camera_id() + " frame " + std::to_string(m.frame_index()) + " holds NaN or inf";
+      return DropReason::kNotFinite;
+    }
+  }
+  return DropReason::kNone;
+}
+
+DropReason Check(const v1::ImuBatch& m, std::string* detail) {
+  for (const auto& s : m.samples()) {
+    if (s.sensor_id().empty()) return *detail = m.hub_id() + ": sample without sensor_id", DropReason::kInvalid;
+    for (double v : {s.qw(), s.qx(), s.qy(), s.qz(), s.ax(), s.ay(), s.az()}) {
+      if (!std::isfinite(v)) return *detail = m.hub_id() + "/" + s.sensor_id() + " holds NaN or inf", DropReason::kNotFinite;
+    }
+  }
+  return DropReason::kNone;
+}
+
+DropReason Check(const v1::PoseFrame& m, std::string* detail) {
+  if (!AllFinite(m.theta())) return *detail = "PoseFrame theta holds NaN or inf", DropReason::kNotFinite;
+  return DropReason::kNone;
+}
+
+DropReason Check(const v1::Health&, std::string*) { return DropReason::kNone; }
+
+template <typename M>
+Decoded Parse(std::string_view payload) {
+  Decoded out;
+  auto message = std::make_unique<M>();
+  if (!message->ParseFromArray(payload.data(), static_cast<int>(payload.size()))) {
+    out.reason = DropReason::kUndecodable;
+    out.detail = M::descriptor()->full_name() + ": not a valid encoding";
+    return out;
+  }
+  out.reason = Check(*message, &out.detail);
+  if (out.reason == DropReason::kNone) out.message = std::move(message);
+  return out;
+}
+
+}  // namespace
+
+const char* ToString(DropReason reason) {
+  switch (reason) {
+    case DropReason::kNone: return "none";
+    case DropReason::kUnknownType: return "unknown_type";
+    case DropReason::kWrongVersion: return "wrong_version";
+    case DropReason::kOversized: return "oversized";
+    case DropReason::kUndecodable: return "undecodable";
+    case DropReason::kNotFinite: return "not_finite";
+    case DropReason::kInvalid: return "invalid";
+  }
+  return "?";
+}
+
+std::string TypeName(const google::protobuf::Message& message) {
+  return message.GetDescriptor()->full_name();
+}
+
+Decoded DecodeMessage(std::string_view type, std::string_view payload) {
+  Decoded out;
+  if (payload.size() > kMaxPayload) {
+    out.reason = DropReason::kOversized;
+    out.detail = std::to_string(payload.size()) + " bytes";
+    return out;
+  }
+  if (type == "mocap.v1.KeypointFrame") return Parse<v1::KeypointFrame>(payload);
+  if (type == "mocap.v1.ImuBatch") return Parse<v1::ImuBatch>(payload);
+  if (type == "mocap.v1.PoseFrame") return Parse<v1::PoseFrame>(payload);
+  if (type == "mocap.v1.Health") return Parse<v1::Health>(payload);
+  const std::string_view package = type.substr(0, type.rfind('.') == std::string_view::npos ? 0 : type.rfind('.'));
+  const bool other_version = package.substr(0, 6) == "mocap." && package != kVersion;
+  out.reason = other_version ? DropReason::kWrongVersion : DropReason::kUnknownType;
+  out.detail = "message type '" + std::string(type.substr(0, 80)) + "'";
+  return out;
+}
+
+}  // namespace mocap::wire
