@@ -1,4 +1,5 @@
-"""A simulated take: a real clip played in front of simulated cameras and IMUs.
+"""A simulated take: a real motion (a BVH clip, or poses in memory such as
+mocap.demo_motion's) played in front of simulated cameras and IMUs.
 
 Presets as the paper: HQ detects on every frame with 8 cameras; HS on 2 consecutive
 frames of every 8 with 4 cameras; with the 13- or 6-IMU set. Cameras: positions on a
@@ -84,11 +85,18 @@ def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
 
 
 def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
+    """A take of a BVH clip, resampled at config.rate."""
+    mapping, thetas, dt = retarget.load_clip(clip, config.rate)
+    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+    return simulate_motion(skeleton, thetas, dt, config, rng)
+
+
+def simulate_motion(skeleton: _core.Skeleton, thetas: np.ndarray, dt: float, config: Config,
+                    rng: np.random.Generator) -> Take:
+    """A take of a motion in memory: (F, 66) poses of `skeleton`, dt apart (config.rate unused)."""
     preset = PRESETS[config.preset]
     if config.detect_every:
         preset = dataclasses.replace(preset, period=config.detect_every[0], burst=config.detect_every[1])
-    mapping, thetas, dt = retarget.load_clip(clip, config.rate)
-    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{config.layout}.json"), skeleton).scaled_to(skeleton)
     sites = layout.offsets + detector.site_offsets(len(layout), config.detector, rng)
     imus = _core.load_imu_sites(str(paths.IMU_SETS[preset.imus]), skeleton)
@@ -104,7 +112,7 @@ def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
     times = true_times + rng.normal(scale=config.time_jitter_s, size=len(thetas))
     times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing
     keypoints = _detections(skeleton, layout, sites, true_rig, thetas, preset, config, rng)
-    quats, accs = _imu_readings(skeleton, imus, thetas, true_times, config, rng)
+    quats, accs = imu_readings(skeleton, imus, thetas, true_times, config, rng)
     return Take(skeleton, layout, imus, told_rig, true_rig, thetas, times, keypoints, quats, accs, sites)
 
 
@@ -130,7 +138,9 @@ def _detections(skeleton, layout, sites, rig, thetas, preset: Preset, config: Co
     return out
 
 
-def _imu_readings(skeleton, imus, thetas, times, config: Config, rng):
+def imu_readings(skeleton, imus, thetas, times, config: Config, rng):
+    """The IMUs' readings of poses at `times` with config.imu's errors: quaternions (F, M, 4)
+    w, x, y, z and accelerations (F, M, 3) in the sensor frames."""
     sensor_world, accel = studio.sensor_motion(skeleton, imus, thetas, times)
     parents, offsets = skeleton.parents, skeleton.offsets
     axis = np.zeros(accel.shape)  # each sensor's bone direction, towards the bone's first child
