@@ -16,6 +16,7 @@
 #include "mocap/skeleton.h"
 #include "mocap/so3.h"
 #include "mocap/solver.h"
+#include "pipeline.h"
 
 namespace py = pybind11;
 using namespace mocap;
@@ -405,4 +406,44 @@ PYBIND11_MODULE(_core, m) {
       .def("set_warm_start", &Solver::SetWarmStart)
       .def_property_readonly("pose", &Solver::pose)
       .def_property_readonly("initialised", &Solver::initialised);
+
+  // The live host's pipeline without the transport (host/daemon/pipeline.h): an offline
+  // solve of a recording feeds it the recorded messages with their arrival times.
+  py::class_<HostPipeline>(m, "HostPipeline")
+      .def_static(
+          "load",
+          [](const std::string& session_path) {
+            Session session;
+            std::string e;
+            if (!LoadSession(session_path, &session, &e)) throw std::invalid_argument(e);
+            auto p = HostPipeline::Create(std::move(session), &e);
+            if (!p) throw std::invalid_argument(e);
+            return p;
+          },
+          py::arg("session_path"), "A pipeline from a session file (ValueError when it is wrong).")
+      .def(
+          "feed",
+          [](HostPipeline& p, py::bytes type, py::bytes payload, int64_t now_ns) {
+            std::string why;
+            const bool ok = p.Feed(std::string(type), std::string(payload), now_ns, &why);
+            return py::make_tuple(ok, why);
+          },
+          py::arg("type"), py::arg("payload"), py::arg("now_ns"),
+          "Feed one message; (accepted, why it was dropped).")
+      .def(
+          "solve",
+          [](HostPipeline& p, int64_t now_ns) {
+            std::vector<SolvedFrame> frames;
+            {
+              py::gil_scoped_release release;
+              frames = p.Solve(now_ns);
+            }
+            py::list out;
+            for (const SolvedFrame& f : frames) out.append(py::make_tuple(py::bytes(f.pose.SerializeAsString()), f.last_input_ns));
+            return out;
+          },
+          py::arg("now_ns"), "Frames ready at now_ns: [(PoseFrame bytes, last input arrival ns)].")
+      .def("health", [](HostPipeline& p, int64_t now_ns) { return py::bytes(p.Health(now_ns).SerializeAsString()); })
+      .def_property_readonly("dropped", &HostPipeline::dropped)
+      .def_property_readonly("frames_solved", &HostPipeline::frames_solved);
 }

@@ -1,0 +1,45 @@
+"""Recorded input streams an edge box plays as if it were capturing them live.
+
+A stream file (.npz) holds what cameras and IMUs would produce, times relative to the
+start of the take (ns):
+  camera_ids (C,) str, layout str, image_sizes (C, 2), frame_times_ns (F,),
+  keypoints (F, C, K, 3) float32 pixels + confidence, detected (F,) bool (false: the
+  box captured the frame but ran no detection, high-speed mode),
+  imu_ids (M,) str, imu_times_ns (S,), imu_quaternions (S, M, 4) w, x, y, z,
+  imu_accelerations (S, M, 3) m/s^2 sensor frame.
+The simulated studio writes one (mocap.demo); a real take could be converted to one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclasses.dataclass
+class Streams:
+    camera_ids: list[str]
+    layout: str
+    image_sizes: np.ndarray
+    frame_times_ns: np.ndarray
+    keypoints: np.ndarray
+    detected: np.ndarray
+    imu_ids: list[str]
+    imu_times_ns: np.ndarray
+    imu_quaternions: np.ndarray
+    imu_accelerations: np.ndarray
+
+    def save(self, path: Path) -> None:
+        fields = {f.name: np.asarray(getattr(self, f.name)) for f in dataclasses.fields(self)}
+        np.savez(path, **fields)
+
+    @staticmethod
+    def load(path: Path) -> Streams:
+        with np.load(path, allow_pickle=False) as z:
+            values = {k: z[k] for k in z.files}
+        values["camera_ids"] = [str(c) for c in values["camera_ids"]]
+        values["imu_ids"] = [str(i) for i in values["imu_ids"]]
+        values["layout"] = str(values["layout"])
+        return Streams(**values)

@@ -1,0 +1,180 @@
+"""The running system on one machine: the simulated studio played in real time by edge
+processes (one per camera, one IMU hub) over ZeroMQ on loopback, the C++ host `mocapd`
+solving live, and a consumer collecting PoseFrame and Health (progress, outputs, report).
+
+`mocap demo` and the live benchmark are this with different lengths and outputs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import zmq
+
+from mocap import _core, demo_motion, paths, rotations, transport, wire
+from mocap.errors import InputError
+from mocap.sim import take as sim_take
+from mocap_edge.streams import Streams
+
+MOCAPD = paths.REPO / "build" / "host" / "mocapd"
+LEAD_S = 4.0  # between launching the processes and the take's first frame
+IMU_RATE = 100.0
+
+
+@dataclasses.dataclass
+class Studio:
+    """A simulated take ready to be played: its session folder and truth."""
+    session: Path
+    streams: Path
+    skeleton: _core.Skeleton
+    truth: np.ndarray  # (F, 66) at the frame times
+    frame_times: np.ndarray  # (F,) s, as the cameras report them
+    camera_ids: list[str]
+    endpoints: dict[str, str]  # "cam0".. "hub0", "host" -> endpoint
+
+
+def _free_ports(n: int) -> list[int]:
+    socks = [socket.socket() for _ in range(n)]
+    for s in socks:
+        s.bind(("127.0.0.1", 0))
+    ports = [s.getsockname()[1] for s in socks]
+    for s in socks:
+        s.close()
+    return ports
+
+
+def _imus_json(skeleton: _core.Skeleton, imus) -> dict:
+    names = skeleton.bone_names
+    return {"format": "mocap.imus/1", "imus": [
+        {"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
+         "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
+        for s in imus]}
+
+
+def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0) -> Studio:
+    """Simulates `seconds` of the demo motion and writes the session (skeleton, told rig,
+    IMU set with its mounting — oracle calibration until the calibration issue — layout,
+    prior, endpoints) and the stream file into `folder`."""
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
+    config = sim_take.Config(preset=preset, cameras=cameras)
+    t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
+    # The IMUs sample at their own rate (the take's readings are at frame times).
+    imu_times = np.arange(0.0, (len(thetas) - 1) * dt, 1.0 / IMU_RATE)
+    quats, accs = sim_take.imu_readings(skeleton, t.imus, demo_motion.interpolate(thetas, imu_times / dt),
+                                        imu_times, config, rng)
+    n_kp = len(t.layout)
+    keypoints = np.zeros((len(thetas), len(t.rig.cameras), n_kp, 3), np.float32)
+    detected = np.array([k is not None for k in t.keypoints])
+    for f, k in enumerate(t.keypoints):
+        if k is not None:
+            keypoints[f] = k
+    camera_ids = [c.name for c in t.rig.cameras]
+    streams = Streams(camera_ids, t.layout.name, np.array([[c.width, c.height] for c in t.rig.cameras]),
+                      np.round(t.times * 1e9).astype(np.int64), keypoints, detected, [s.name for s in t.imus],
+                      np.round(imu_times * 1e9).astype(np.int64), quats, accs)
+    streams.save(folder / "streams.npz")
+    ports = _free_ports(len(camera_ids) + 2)
+    endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host"], ports)}
+    (folder / "skeleton.json").write_text(skeleton.to_json())
+    (folder / "rig.json").write_text(t.rig.to_json())
+    (folder / "imus.json").write_text(json.dumps(_imus_json(skeleton, t.imus), indent=1))
+    session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
+               "layout": str(paths.LAYOUTS / f"{t.layout.name}.json"), "prior": str(paths.HOST_DATA / "prior_default.json"),
+               "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}
+    (folder / "session.json").write_text(json.dumps(session, indent=1))
+    return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids, endpoints)
+
+
+@dataclasses.dataclass
+class Run:
+    poses: list  # PoseFrame messages in arrival order
+    healths: list
+    host_summary: dict
+    start_ns: int
+
+
+def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None) -> Run:
+    """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
+    loopback, until the take ends. progress(health) is called once a second; on_pose(pose)
+    for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}."""
+    if not MOCAPD.exists():
+        raise InputError(f"{MOCAPD} is missing: run `make build`")
+    faults = faults or {}
+    duration = float(studio.frame_times[-1])
+    start_ns = time.time_ns() + int(LEAD_S * 1e9)
+    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
+                             "--quiet"], stdout=subprocess.PIPE, text=True)
+    edge = []
+    for c, cam in enumerate(studio.camera_ids):
+        cmd = [sys.executable, "-m", "mocap_edge", "camera", "--streams", str(studio.streams), "--camera", cam,
+               "--bind", studio.endpoints[cam], "--start-ns", str(start_ns), "--seed", str(c)]
+        if faults.get("camera", (None,))[0] == cam:
+            cmd += ["--stop", *map(str, faults["camera"][1:])]
+        edge.append(subprocess.Popen(cmd))
+    cmd = [sys.executable, "-m", "mocap_edge", "imu-hub", "--streams", str(studio.streams),
+           "--bind", studio.endpoints["hub0"], "--start-ns", str(start_ns)]
+    if "imu" in faults:
+        cmd += ["--stop-sensor", faults["imu"][0], "--stop", *map(str, faults["imu"][1:])]
+    edge.append(subprocess.Popen(cmd))
+    context = zmq.Context.instance()
+    sub = transport.subscriber(context, [studio.endpoints["host"]])
+    poses, healths = [], []
+    try:
+        while host.poll() is None:
+            if not sub.poll(200):
+                continue
+            while True:
+                try:
+                    frames = sub.recv_multipart(zmq.NOBLOCK)
+                except zmq.Again:
+                    break
+                try:
+                    msg = wire.decode(frames)
+                except wire.WireError:
+                    continue
+                if isinstance(msg, wire.PoseFrame):
+                    poses.append(msg)
+                    if on_pose:
+                        on_pose(msg)
+                elif isinstance(msg, wire.Health):
+                    healths.append(msg)
+                    if progress:
+                        progress(msg)
+        summary = json.loads(host.stdout.read().strip().splitlines()[-1] or "{}")
+    finally:
+        for p in [*edge, host]:
+            if p.poll() is None:
+                p.terminate()
+            p.wait(timeout=10)
+        sub.close()
+    return Run(poses, healths, summary, start_ns)
+
+
+def score(studio: Studio, run: Run) -> dict:
+    """Accuracy against the simulated truth, latency, and frames that never came back."""
+    from mocap import eval as evaluation
+
+    frame_ns = run.start_ns + np.round(studio.frame_times * 1e9).astype(np.int64)
+    by_time = {p.capture_time_ns: p for p in run.poses}
+    matched = [f for f, t in enumerate(frame_ns) if t in by_time]
+    solved = np.array([list(by_time[frame_ns[f]].theta) for f in matched])
+    latency = np.array([p.latency_ms for p in run.poses])
+    out = {"frames": len(frame_ns), "solved": len(matched), "dropped": len(frame_ns) - len(matched),
+           "latency_p50_ms": float(np.percentile(latency, 50)) if len(latency) else None,
+           "latency_p99_ms": float(np.percentile(latency, 99)) if len(latency) else None,
+           "latency_max_ms": float(latency.max()) if len(latency) else None,
+           "host_dropped": run.host_summary.get("dropped", {})}
+    if len(matched) > 2:
+        e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, float(np.median(np.diff(studio.frame_times))))
+        out.update({k: e[k] for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms")})
+    out["thetas"], out["times"] = solved, studio.frame_times[matched]
+    return out
