@@ -71,7 +71,7 @@ bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::
       const int64_t now = NowNs();
       const bool ok = parts.size() == 2
                           ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
-                          : pipeline->Feed("", "", now, &why);
+                          : pipeline->Reject("undecodable", std::to_string(parts.size()) + " frames, expected 2", &why);
       if (!ok) LogDrop(why, pipeline->dropped());
     }
     for (SolvedFrame& f : pipeline->Solve(NowNs())) {

@@ -19,11 +19,14 @@ StreamSynchroniser::StreamSynchroniser(int num_cameras, int num_imus, SyncOption
     : options_(options), cameras_(num_cameras), imus_(num_imus) {}
 
 bool StreamSynchroniser::Active(const StreamCounts& counts, int64_t now_ns) const {
-  return counts.last_arrival_ns && now_ns - *counts.last_arrival_ns <= options_.stale_after_ns;
+  // A configured stream is expected from the first input of any stream on.
+  const std::optional<int64_t>& last = counts.last_arrival_ns ? counts.last_arrival_ns : first_arrival_ns_;
+  return last && now_ns - *last <= options_.stale_after_ns;
 }
 
 bool StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
   CameraStream& stream = cameras_[input.camera];
+  if (!first_arrival_ns_) first_arrival_ns_ = now_ns;
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
   const int64_t t = input.time_ns;
@@ -53,6 +56,7 @@ bool StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
 
 bool StreamSynchroniser::AddImu(const ImuInput& input, int64_t now_ns) {
   ImuStream& stream = imus_[input.imu];
+  if (!first_arrival_ns_) first_arrival_ns_ = now_ns;
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
   auto& samples = stream.samples;

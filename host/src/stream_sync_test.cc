@@ -157,7 +157,8 @@ TEST(StreamSync, WithoutCamerasTheImusClockTheFrames) {
   options.imu_only_rate_hz = 50;
   StreamSynchroniser sync(2, 1, options);
   std::vector<SyncedFrame> frames;
-  for (int64_t s = kT0; s <= kT0 + 200 * kMs; s += 5 * kMs) {
+  // The cameras are expected for stale_after from the first input; then the IMUs clock.
+  for (int64_t s = kT0; s <= kT0 + options.stale_after_ns + 200 * kMs; s += 5 * kMs) {
     sync.AddImu(Imu(0, s), s + kMs);
     for (auto& f : sync.TakeReady(s + kMs)) frames.push_back(std::move(f));
   }
@@ -171,10 +172,10 @@ TEST(StreamSync, AnOverfullQueueHandsOverItsOldestFrame) {
   options.max_pending_frames = 4;
   StreamSynchroniser sync(2, 0, options);
   sync.AddCamera(Cam(1, kT0), kT0);  // camera 1 is active but never delivers again
-  sync.TakeReady(kT0);
+  EXPECT_TRUE(sync.TakeReady(kT0).empty());  // camera 0 is expected too
   for (int k = 1; k <= 6; ++k) sync.AddCamera(Cam(0, kT0 + k * kFrame), kT0);  // clock stuck at kT0
   auto ready = sync.TakeReady(kT0);
-  EXPECT_EQ(ready.size(), 2u);
+  EXPECT_EQ(ready.size(), 3u);
   EXPECT_EQ(sync.pending(), 4);
 }
 

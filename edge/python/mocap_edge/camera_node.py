@@ -6,6 +6,8 @@ are the camera box issue's."""
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import zmq
 
@@ -26,10 +28,20 @@ def keypoint_frame(streams: Streams, f: int, c: int, start_ns: int) -> wire.Keyp
     return msg
 
 
+def _rebind(context: zmq.Context, endpoint: str, attempts: int = 50) -> zmq.Socket:
+    """A new publisher on the endpoint a closed one held (ZeroMQ releases it shortly after)."""
+    for _ in range(attempts - 1):
+        try:
+            return transport.publisher(context, endpoint)
+        except zmq.ZMQError:
+            time.sleep(0.02)
+    return transport.publisher(context, endpoint)
+
+
 def run(streams: Streams, camera: str, endpoint: str, start_ns: int, detect_ms: float = 6.0,
         jitter_ms: float = 0.5, seed: int = 0, stop_at: tuple[float, float] | None = None) -> int:
     """Plays one camera of the streams in real time from start_ns; returns frames sent.
-    stop_at (from_s, to_s) unplugs the box for that span of the take (fault drills)."""
+    stop_at (from_s, to_s) unplugs the box (closes its socket) for that span of the take."""
     c = streams.camera_ids.index(camera)
     rng = np.random.default_rng(seed)
     context = zmq.Context.instance()
@@ -38,8 +50,12 @@ def run(streams: Streams, camera: str, endpoint: str, start_ns: int, detect_ms: 
     try:
         for f in range(len(streams.frame_times_ns)):
             t = streams.frame_times_ns[f] * 1e-9
-            if stop_at and stop_at[0] <= t < stop_at[1]:
+            if stop_at and stop_at[0] <= t < stop_at[1]:  # unplugged: the socket is gone
+                if not socket.closed:
+                    socket.close(linger=0)
                 continue
+            if socket.closed:  # plugged back in: the host's subscriber reconnects by itself
+                socket = _rebind(context, endpoint)
             msg = keypoint_frame(streams, f, c, start_ns)
             ready = msg.capture_time_ns + int(1e6 * (detect_ms + rng.exponential(jitter_ms)))
             pacing.sleep_until(ready)

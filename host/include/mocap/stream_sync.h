@@ -5,8 +5,9 @@
 // active camera delivered it or moved past it and every active IMU has a sample at or
 // after its time; at the latest when `now` passes its time + max_wait. IMU orientations
 // are slerped, accelerations interpolated linearly, to the frame's time. A stream is
-// active while it delivered within stale_after: a stopped box never stalls the solve,
-// and counts again from its first new message. Late (after their frame was handed over)
+// active while it delivered within stale_after (every configured stream is expected from
+// the first input of any): a stopped box never stalls the solve, and counts again from its
+// first new message. Late (after their frame was handed over)
 // and duplicated inputs are counted and dropped; out-of-order ones are put in order.
 // With no camera active, frames are clocked from the IMUs at imu_only_rate_hz.
 //
@@ -118,7 +119,7 @@ class StreamSynchroniser {
   std::vector<CameraStream> cameras_;
   std::vector<ImuStream> imus_;
   std::deque<Group> pending_;  // by time
-  std::optional<int64_t> last_released_ns_, epoch_ns_;
+  std::optional<int64_t> last_released_ns_, epoch_ns_, first_arrival_ns_;
   uint64_t frames_released_ = 0, frames_forced_ = 0;
 };
 

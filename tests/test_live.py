@@ -1,0 +1,78 @@
+"""The system end to end on loopback: edge processes -> ZeroMQ -> mocapd -> PoseFrame.
+
+Real processes, real sockets, real time (a few seconds of take): every frame comes back
+solved, a camera box that is unplugged (its socket closed) and an IMU that goes silent
+degrade the solve, which recovers when they return; garbage on the wire is counted and
+dropped while the host keeps solving."""
+
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import zmq
+
+from mocap import live, transport, wire
+
+pytestmark = pytest.mark.skipif(not live.MOCAPD.exists(), reason="mocapd is not built (make build)")
+
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory):
+    return live.prepare(tmp_path_factory.mktemp("live"), seconds=6.0, seed=1)
+
+
+def test_every_frame_is_solved_and_faults_degrade_then_recover(studio):
+    run = live.play(studio, faults={"camera": ("cam3", 2.0, 3.5), "imu": ("lower_back", 2.0, 3.5)})
+    result = live.score(studio, run)
+    assert result["dropped"] == 0, result
+    assert result["pos_error_cm"] < 4.0, result
+    t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
+    cams = np.array(["cam3" in p.cameras for p in run.poses])
+    imus = np.array(["lower_back" in p.imus for p in run.poses])
+    during, after = (t > 2.1) & (t < 3.4), t > 4.0
+    assert not cams[during].any() and not imus[during].any()
+    assert cams[after].mean() > 0.95 and imus[after].all()  # the box reconnected, the IMU is back
+    counts = np.array([len(p.cameras) for p in run.poses])
+    assert counts[0] == 8 and np.median(counts[after]) == 8  # no camera is left out at the start
+    stale = [s for h in run.healths for s in h.streams if s.stream == "camera/cam3" and not s.active]
+    assert stale, "Health never reported the unplugged camera inactive"
+
+
+def test_garbage_on_the_wire_is_counted_and_dropped(studio):
+    context = zmq.Context.instance()
+    junk = transport.publisher(context, studio.endpoints["cam0"])  # a broken box on cam0's endpoint
+    host = subprocess.Popen([str(live.MOCAPD), str(studio.session), "--duration", "3", "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    sub = transport.subscriber(context, [studio.endpoints["host"]])
+    try:
+        time.sleep(1.0)  # the host connects
+        frame = wire.KeypointFrame(camera_id="cam0", capture_time_ns=time.time_ns(), detected=True,
+                                   keypoint_layout="blazepose33")
+        frame.persons.add(x=[float("nan")] * 33, y=[1.0] * 33, confidence=[1.0] * 33)
+        for frames in ([b"mocap.v1.KeypointFrame", frame.SerializeToString()], [b"mocap.v2.KeypointFrame", b""],
+                       [b"mocap.v1.ImuBatch", b"\xff\xff\xff\xff"], [b"x", b"y", b"z"],
+                       [b"mocap.v1.KeypointFrame", bytes(2 << 20)]):
+            junk.send_multipart(frames)
+        for k in range(30):  # then good frames: the host still solves them
+            good = wire.KeypointFrame(camera_id="cam0", frame_index=k, capture_time_ns=time.time_ns(),
+                                      detected=False)
+            junk.send_multipart(wire.encode(good))
+            time.sleep(1 / 60)
+        out, err = host.communicate(timeout=20)
+    finally:
+        junk.close(0)
+        sub.close()
+        if host.poll() is None:
+            host.kill()
+    assert host.returncode == 0, err
+    summary = __import__("json").loads(out.strip().splitlines()[-1])
+    assert summary["dropped"] == {"not_finite": 1, "wrong_version": 1, "undecodable": 2, "oversized": 1}, summary
+    assert summary["frames"] >= 25  # the good frames that followed were solved
+    assert "dropped (1 not_finite)" in err
+
+
+def test_edge_command_line_explains_itself():
+    out = subprocess.run([sys.executable, "-m", "mocap_edge", "--help"], capture_output=True, text=True)
+    assert out.returncode == 0 and "--start-ns" in out.stdout
