@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import zmq
 
-from mocap import live, transport, wire
+from mocap import live, offline, transport, wire
 
 pytestmark = pytest.mark.skipif(not live.MOCAPD.exists(), reason="mocapd is not built (make build)")
 
@@ -23,8 +23,9 @@ def studio(tmp_path_factory):
     return live.prepare(tmp_path_factory.mktemp("live"), seconds=6.0, seed=1)
 
 
-def test_every_frame_is_solved_and_faults_degrade_then_recover(studio):
-    run = live.play(studio, faults={"camera": ("cam3", 2.0, 3.5), "imu": ("lower_back", 2.0, 3.5)})
+def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path):
+    run = live.play(studio, faults={"camera": ("cam3", 2.0, 3.5), "imu": ("lower_back", 2.0, 3.5)},
+                    record=tmp_path / "take.mcap")
     result = live.score(studio, run)
     assert result["dropped"] == 0, result
     assert result["pos_error_cm"] < 4.0, result
@@ -38,6 +39,14 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio):
     assert counts[0] == 8 and np.median(counts[after]) == 8  # no camera is left out at the start
     stale = [s for h in run.healths for s in h.streams if s.stream == "camera/cam3" and not s.active]
     assert stale, "Health never reported the unplugged camera inactive"
+
+    # The recording solved offline through the same pipeline gives the live poses back.
+    poses, _ = offline.solve_recording(tmp_path / "take.mcap", studio.session)
+    live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
+    common = [p for p in poses if p.capture_time_ns in live_by_time]
+    assert len(common) >= 0.98 * len(run.poses)
+    diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in common]
+    assert np.median(diff) < 1e-6, np.percentile(diff, [50, 90, 100])
 
 
 def test_garbage_on_the_wire_is_counted_and_dropped(studio):
@@ -76,3 +85,4 @@ def test_garbage_on_the_wire_is_counted_and_dropped(studio):
 def test_edge_command_line_explains_itself():
     out = subprocess.run([sys.executable, "-m", "mocap_edge", "--help"], capture_output=True, text=True)
     assert out.returncode == 0 and "--start-ns" in out.stdout
+

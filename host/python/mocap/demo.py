@@ -45,7 +45,7 @@ def report(result: dict, seconds: float, studio: live.Studio) -> str:
         "Host latency: from the arrival of a frame's last input to the publication of its pose.", ""])
 
 
-def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0) -> dict:
+def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record: str | None = None) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     print(f"mocap demo: simulating {seconds:.0f} s of the studio into {out / 'session'}", file=sys.stderr)
     studio = live.prepare(out / "session", seconds, seed=seed)
@@ -55,7 +55,8 @@ def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0) -> dic
         sender = VmcSender(studio.skeleton, host=host or "127.0.0.1", port=int(port or 39539))
     print(f"mocap demo: starting mocapd and {len(studio.camera_ids)} cameras + an IMU hub", file=sys.stderr)
     run_ = live.play(studio, progress=_progress,
-                     on_pose=(lambda p: sender.send(list(p.theta), p.capture_time_ns * 1e-9)) if sender else None)
+                     on_pose=(lambda p: sender.send(list(p.theta), p.capture_time_ns * 1e-9)) if sender else None,
+                     record=Path(record) if record else None)
     print(file=sys.stderr)
     result = live.score(studio, run_)
     if len(result["thetas"]):

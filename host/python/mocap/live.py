@@ -12,13 +12,14 @@ import json
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import zmq
 
-from mocap import _core, demo_motion, paths, rotations, transport, wire
+from mocap import _core, demo_motion, paths, recording, rotations, transport, wire
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
 from mocap_edge.streams import Streams
@@ -102,7 +103,7 @@ class Run:
     start_ns: int
 
 
-def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None) -> Run:
+def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None, record: Path | None = None) -> Run:
     """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
     loopback, until the take ends. progress(health) is called once a second; on_pose(pose)
     for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}."""
@@ -125,6 +126,11 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
     if "imu" in faults:
         cmd += ["--stop-sensor", faults["imu"][0], "--stop", *map(str, faults["imu"][1:])]
     edge.append(subprocess.Popen(cmd))
+    recorder, stop = None, threading.Event()
+    if record:
+        recorder = threading.Thread(target=recording.record, args=(list(studio.endpoints.values()), record),
+                                    kwargs={"stop": stop}, daemon=True)
+        recorder.start()
     context = zmq.Context.instance()
     sub = transport.subscriber(context, [studio.endpoints["host"]])
     poses, healths = [], []
@@ -156,6 +162,9 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
                 p.terminate()
             p.wait(timeout=10)
         sub.close()
+        stop.set()
+        if recorder:
+            recorder.join(timeout=10)
     return Run(poses, healths, summary, start_ns)
 
 
@@ -178,3 +187,18 @@ def score(studio: Studio, run: Run) -> dict:
         out.update({k: e[k] for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms")})
     out["thetas"], out["times"] = solved, studio.frame_times[matched]
     return out
+
+
+def bench(seconds: float = 60.0) -> dict:
+    """The live benchmark: 8 cameras x 60 fps + 13 IMUs x 100 Hz over loopback for
+    `seconds`; host latency and frames that never came back."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        studio = prepare(Path(folder), seconds)
+        result = score(studio, play(studio))
+    return {"bench": "live", "seconds": seconds, "cameras": len(studio.camera_ids), "imus": 13,
+            "imu_rate_hz": IMU_RATE, "latency_p50_ms": result["latency_p50_ms"],
+            "latency_p99_ms": result["latency_p99_ms"], "latency_max_ms": result["latency_max_ms"],
+            "frames": result["frames"], "dropped": result["dropped"], "pos_error_cm": result.get("pos_error_cm"),
+            "host_dropped_inputs": result["host_dropped"]}

@@ -1,0 +1,35 @@
+"""Offline solve of a recording: the recorded inputs fed through the live host's own
+pipeline (C++ HostPipeline: decode, synchronise, solve) in arrival order, with their
+recorded arrival times — the result is what the live host would have published."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, recording, wire
+
+FLUSH_NS = 1_000_000_000  # after the last input: frames still waiting are handed over
+
+
+def solve_recording(path: Path, session: Path) -> tuple[list, dict]:
+    """PoseFrames of the recording's inputs (/camera/*, /imu/*) solved with the session's
+    skeleton, rig, layout and IMU set; and the inputs dropped, by reason."""
+    pipeline = _core.HostPipeline.load(str(session))
+    poses, now = [], 0
+    for m in recording.read(path):
+        if not m.topic.startswith(("/camera/", "/imu/")):
+            continue
+        now = m.log_time_ns
+        pipeline.feed(m.type_name.encode(), m.payload, now)
+        poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now)]
+    poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now + FLUSH_NS)]
+    return poses, dict(pipeline.dropped)
+
+
+def frame_rate(poses: list) -> float:
+    """The take's frame rate from the solved frames' capture times."""
+    if len(poses) < 2:
+        return 60.0
+    return float(1e9 / np.median(np.diff([p.capture_time_ns for p in poses])))
