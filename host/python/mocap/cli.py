@@ -46,6 +46,27 @@ def _rig(args: argparse.Namespace) -> int:
     return 0
 
 
+def _record(args: argparse.Namespace) -> int:
+    import signal
+    import threading
+
+    from mocap import recording
+
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())  # Ctrl-C ends the recording cleanly
+    counts = recording.record(args.connect, args.out, args.seconds, stop)
+    print(json.dumps({"out": args.out, "recorded": counts.recorded, "dropped": counts.dropped}), flush=True)
+    return 0
+
+
+def _replay(args: argparse.Namespace) -> int:
+    from mocap import recording
+
+    sent = recording.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics)
+    print(json.dumps({"file": args.file, "sent": sent}), flush=True)
+    return 0
+
+
 def _train_prior(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -149,6 +170,22 @@ def build_parser() -> argparse.ArgumentParser:
     i = sub.add_parser("imu-stats", help="noise and bias figures of the real IMU recordings (for the simulator)")
     i.add_argument("--imu", default=None, help="folder of the recordings (default ../shared/data/imu)")
     i.set_defaults(func=_imu_stats)
+
+    rec = sub.add_parser("record", help="record the streams of ZeroMQ publishers to an MCAP file (Foxglove)")
+    rec.add_argument("--connect", nargs="+", required=True, metavar="EP", help="publisher endpoints, tcp://host:port")
+    rec.add_argument("--out", required=True, help="MCAP file to write")
+    rec.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at Ctrl-C)")
+    rec.set_defaults(func=_record)
+
+    rep = sub.add_parser("replay", help="publish a recording's messages on ZeroMQ, following their log times")
+    rep.add_argument("file", help="MCAP file made by `mocap record`")
+    rep.add_argument("--bind", required=True, metavar="EP", help="endpoint to publish on, tcp://*:port")
+    pace = rep.add_mutually_exclusive_group()
+    pace.add_argument("--speed", type=float, default=1.0, help="times real time (default 1)")
+    pace.add_argument("--max-speed", action="store_true", help="as fast as the subscribers take the messages")
+    rep.add_argument("--topics", nargs="+", default=None, metavar="PATTERN",
+                     help="topic patterns to send (default: the inputs, /camera/* /imu/*)")
+    rep.set_defaults(func=_replay)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
     r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")

@@ -1,0 +1,222 @@
+"""Recording the streams to MCAP files, and replaying them on ZeroMQ.
+
+A recording has one channel per stream, its topic taken from the message:
+
+| message | topic | publish_time (the message's own time) |
+|---|---|---|
+| KeypointFrame | /camera/<camera_id> | capture_time_ns |
+| ImuBatch | /imu/<hub_id> | send_time_ns |
+| PoseFrame | /pose | capture_time_ns |
+| Health | /health/<source> | time_ns |
+
+log_time is the arrival time at the recorder (time.time_ns()). Messages are stored as the
+received bytes (message encoding "protobuf"), so fields unknown to this version survive.
+Each message type has one schema: encoding "protobuf", name = full type name, data = a
+serialised FileDescriptorSet of the type's .proto file and all its dependencies. A
+recording is thus self-describing (Foxglove opens it as is; `read` needs no generated code).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import logging
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import BinaryIO
+
+import zmq
+from google.protobuf import descriptor_pb2
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap.writer import Writer
+
+from mocap import transport, wire
+from mocap.errors import InputError
+
+log = logging.getLogger(__name__)
+
+INPUT_TOPICS = ("/camera/*", "/imu/*")  # what `replay` sends by default: the host's inputs
+POLL_MS = 100  # how often `record` checks its stop conditions
+BACKPRESSURE_SLEEP_S = 0.001  # `replay`'s pause while a subscriber's queue is full
+REPLAY_LINGER_MS = 10_000  # time the last queued messages get to reach slow subscribers
+
+
+@dataclass(frozen=True)
+class RecordedMessage:
+    log_time_ns: int
+    topic: str
+    type_name: str  # "mocap.v1.KeypointFrame", the ZeroMQ type frame
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class Counts:
+    recorded: dict[str, int]  # per topic
+    dropped: dict[str, int]  # per wire.WireError reason
+
+
+def topic_and_time(message) -> tuple[str, int]:
+    """The MCAP topic of a decoded message, and its own time (ns; see the module docstring)."""
+    match message:
+        case wire.KeypointFrame():
+            return f"/camera/{message.camera_id}", message.capture_time_ns
+        case wire.ImuBatch():
+            return f"/imu/{message.hub_id}", message.send_time_ns
+        case wire.PoseFrame():
+            return "/pose", message.capture_time_ns
+        case wire.Health():
+            return f"/health/{message.source}", message.time_ns
+    raise TypeError(f"no topic for {type(message).__name__}")
+
+
+def file_descriptor_set(message_descriptor) -> bytes:
+    """The serialised FileDescriptorSet of a message type's file and its dependencies, dependencies first."""
+    files = descriptor_pb2.FileDescriptorSet()
+    seen: set[str] = set()
+
+    def add(file) -> None:
+        if file.name in seen:
+            return
+        seen.add(file.name)
+        for dependency in file.dependencies:
+            add(dependency)
+        file.CopyToProto(files.file.add())
+
+    add(message_descriptor.file)
+    return files.SerializeToString()
+
+
+class Recorder:
+    """Writes well-formed mocap.v1 messages to an MCAP file; counts and skips the others."""
+
+    def __init__(self, path: str | Path, on_record: Callable[[str], None] | None = None):
+        """on_record, if given, is called with the topic of every recorded message (progress, tests)."""
+        self._on_record = on_record
+        self._writer = Writer(str(path))
+        self._writer.start(profile="protobuf", library="mocap recording")
+        self._schema_ids: dict[str, int] = {}
+        self._channel_ids: dict[str, int] = {}
+        self._closed = False
+        self.recorded: Counter[str] = Counter()
+        self.dropped: Counter[str] = Counter()
+
+    def write(self, frames: list[bytes], log_time_ns: int) -> bool:
+        """Records a two-frame [type, payload] message received at log_time_ns; False if it was dropped."""
+        try:
+            message = wire.decode(frames)
+        except wire.WireError as e:
+            self.dropped[e.reason] += 1
+            log.debug("dropped: %s", e)
+            return False
+        topic, own_time_ns = topic_and_time(message)
+        self._writer.add_message(self._channel_id(topic, message.DESCRIPTOR), log_time=log_time_ns,
+                                 data=bytes(frames[1]), publish_time=max(own_time_ns, 0))  # MCAP times are unsigned
+        self.recorded[topic] += 1
+        if self._on_record is not None:
+            self._on_record(topic)
+        return True
+
+    def counts(self) -> Counts:
+        return Counts(dict(self.recorded), dict(self.dropped))
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._writer.finish()  # writes the index and closes the file
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _channel_id(self, topic: str, descriptor) -> int:
+        if topic not in self._channel_ids:
+            name = descriptor.full_name
+            if name not in self._schema_ids:
+                self._schema_ids[name] = self._writer.register_schema(name, "protobuf", file_descriptor_set(descriptor))
+            self._channel_ids[topic] = self._writer.register_channel(topic, "protobuf", self._schema_ids[name])
+        return self._channel_ids[topic]
+
+
+def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
+           stop: threading.Event | None = None, on_record: Callable[[str], None] | None = None) -> Counts:
+    """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is set."""
+    deadline = None if seconds is None else time.monotonic() + seconds
+    stop = stop or threading.Event()
+    with Recorder(path, on_record) as recorder, zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+            if socket.poll(POLL_MS):
+                recorder.write(socket.recv_multipart(), time.time_ns())
+        return recorder.counts()
+
+
+def read(path: str | Path) -> Iterator[RecordedMessage]:
+    """The messages of a recording in log-time order."""
+    with open(path, "rb") as stream:
+        yield from _messages(stream, str(path))
+
+
+def _messages(stream: BinaryIO, name: str) -> Iterator[RecordedMessage]:
+    try:
+        reader = make_reader(stream)  # checks the magic now, not at the first message
+    except McapError as e:
+        raise InputError(f"{name}: not an MCAP file ({e})") from None
+    return (RecordedMessage(message.log_time, channel.topic, schema.name if schema else "", message.data)
+            for schema, channel, message in reader.iter_messages(log_time_order=True))
+
+
+def replay(path: str | Path, endpoint: str, speed: float | None = 1.0, topics: Iterable[str] | None = None,
+           wait_for_subscribers: float = 1.0) -> int:
+    """Publishes the recorded messages on `endpoint` as [type, payload]; returns how many were sent.
+
+    topics: fnmatch patterns of the topics to send (default INPUT_TOPICS, the host's inputs).
+    speed: times real time, following the log-time gaps; None sends as fast as the subscribers take
+    them. Pacing never blocks inside ZeroMQ: the socket refuses a message at a subscriber's
+    high-water mark (XPUB_NODROP) and the replay sleeps BACKPRESSURE_SLEEP_S and retries, so a slow
+    subscriber slows the replay down instead of losing messages.
+    Sending starts when a first subscriber has joined, or after wait_for_subscribers seconds.
+    """
+    if speed is not None and not speed > 0:
+        raise InputError(f"replay speed must be positive, not {speed}")
+    patterns = tuple(INPUT_TOPICS if topics is None else topics)
+    with open(path, "rb") as stream:
+        messages = (m for m in _messages(stream, str(path)) if any(fnmatch.fnmatchcase(m.topic, p) for p in patterns))
+        with zmq.Context() as context, _replay_socket(context, endpoint) as socket:
+            if socket.poll(wait_for_subscribers * 1000):
+                socket.recv()  # the first subscription
+            return _publish(socket, messages, speed)
+
+
+def _publish(socket: zmq.Socket, messages: Iterable[RecordedMessage], speed: float | None) -> int:
+    sent, start_s, first_log_ns = 0, time.monotonic(), None
+    for m in messages:
+        if speed is not None:
+            first_log_ns = m.log_time_ns if first_log_ns is None else first_log_ns
+            time.sleep(max(0.0, start_s + (m.log_time_ns - first_log_ns) / 1e9 / speed - time.monotonic()))
+        _send(socket, [m.type_name.encode(), m.payload])
+        sent += 1
+    return sent  # closing the socket then waits (LINGER) for the queued messages to leave
+
+
+def _replay_socket(context: zmq.Context, endpoint: str) -> zmq.Socket:
+    """A PUB socket that reports subscriptions and refuses (instead of dropping) at the high-water mark."""
+    socket = context.socket(zmq.XPUB)
+    socket.setsockopt(zmq.SNDHWM, transport.PUBLISHER_HWM)
+    socket.setsockopt(zmq.XPUB_NODROP, 1)
+    socket.setsockopt(zmq.LINGER, REPLAY_LINGER_MS)
+    socket.bind(endpoint)
+    return socket
+
+
+def _send(socket: zmq.Socket, frames: list[bytes]) -> None:
+    while True:
+        try:
+            socket.send_multipart(frames, zmq.NOBLOCK)
+            return
+        except zmq.Again:
+            time.sleep(BACKPRESSURE_SLEEP_S)
