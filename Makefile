@@ -2,7 +2,7 @@
 PY     := $(CURDIR)/.venv/bin/python
 BUILD  := build
 
-.PHONY: setup build test bench lint clean
+.PHONY: setup build test bench demo lint clean
 
 setup:            ## install Debian + pinned PyPI dependencies, create .venv (idempotent; root)
 	bash scripts/setup.sh
@@ -12,9 +12,12 @@ build:            ## configure and build the C++ host library, tests and Python 
 	cmake -S . -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
 	cmake --build $(BUILD)
 
-test: build       ## every test of every part
+test: setup build ## every test of every part (installs what is missing first)
 	ctest --test-dir $(BUILD) --output-on-failure
 	$(PY) -m pytest -q
+
+demo: setup build ## the live demo on a simulated studio: out/demo.bvh, out/report.md
+	$(PY) -m mocap.cli demo --out out
 
 bench: build      ## benchmarks, one JSON object per line
 	@OPENBLAS_NUM_THREADS=1 $(PY) -m mocap.cli bench
@@ -24,4 +27,4 @@ clean:
 
 lint:             ## formatting of the C++ code, static checks of the Python code
 	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')
-	$(CURDIR)/.venv/bin/ruff check host/python
+	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests

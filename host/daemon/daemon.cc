@@ -25,13 +25,15 @@ void LogDrop(const std::string& why, const std::map<std::string, uint64_t>& drop
   const std::string reason = why.substr(0, why.find(':'));
   const auto it = dropped.find(reason);
   const uint64_t n = it == dropped.end() ? 0 : it->second;
-  if (n <= 10 || n % 1000 == 0) std::cerr << "mocapd: dropped (" << n << " " << reason << "): " << why << "\n";
+  if (n <= 10 || n % 1000 == 0)
+    std::cerr << "mocapd: dropped (" << n << " " << reason << "): " << why << "\n";
 }
 
 }  // namespace
 
 int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -69,9 +71,11 @@ bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::
       if (!zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait)) break;
       std::string why;
       const int64_t now = NowNs();
-      const bool ok = parts.size() == 2
-                          ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
-                          : pipeline->Reject("undecodable", std::to_string(parts.size()) + " frames, expected 2", &why);
+      const bool ok =
+          parts.size() == 2
+              ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
+              : pipeline->Reject("undecodable",
+                                 std::to_string(parts.size()) + " frames, expected 2", &why);
       if (!ok) LogDrop(why, pipeline->dropped());
     }
     for (SolvedFrame& f : pipeline->Solve(NowNs())) {
@@ -87,12 +91,13 @@ bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::
       const v1::Health health = pipeline->Health(now);
       Send(pub, health);
       if (options.log_health) {
-        std::cerr << "mocapd: " << health.frames_solved() << " frames, latency p50 " << health.latency_p50_ms()
-                  << " ms p99 " << health.latency_p99_ms() << " ms\n";
+        std::cerr << "mocapd: " << health.frames_solved() << " frames, latency p50 "
+                  << health.latency_p50_ms() << " ms p99 " << health.latency_p99_ms() << " ms\n";
       }
       next_health += static_cast<int64_t>(options.health_period_s * 1e9);
     }
-    if (options.duration_s > 0 && now - start >= static_cast<int64_t>(options.duration_s * 1e9)) break;
+    if (options.duration_s > 0 && now - start >= static_cast<int64_t>(options.duration_s * 1e9))
+      break;
   }
   summary->dropped = pipeline->dropped();
   return true;

@@ -30,27 +30,35 @@ int main(int argc, char** argv) {
   mocap::DaemonOptions options;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--duration" && i + 1 < argc) options.duration_s = std::atof(argv[++i]);
-    else if (a == "--health-period" && i + 1 < argc) options.health_period_s = std::atof(argv[++i]);
-    else if (a == "--quiet") options.log_health = false;
-    else return std::cerr << "mocapd: unknown argument " << a << "\n", 2;
+    if (a == "--duration" && i + 1 < argc)
+      options.duration_s = std::atof(argv[++i]);
+    else if (a == "--health-period" && i + 1 < argc)
+      options.health_period_s = std::atof(argv[++i]);
+    else if (a == "--quiet")
+      options.log_health = false;
+    else
+      return std::cerr << "mocapd: unknown argument " << a << "\n", 2;
   }
   std::string error;
   mocap::Session session;
-  if (!mocap::LoadSession(argv[1], &session, &error)) return std::cerr << "mocapd: " << error << "\n", 1;
+  if (!mocap::LoadSession(argv[1], &session, &error))
+    return std::cerr << "mocapd: " << error << "\n", 1;
   auto pipeline = mocap::HostPipeline::Create(std::move(session), &error);
   if (!pipeline) return std::cerr << "mocapd: " << error << "\n", 1;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, " << pipeline->session().imus.size()
-            << " IMUs; publishing on " << pipeline->session().output << "\n";
+  std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, "
+            << pipeline->session().imus.size() << " IMUs; publishing on "
+            << pipeline->session().output << "\n";
   mocap::DaemonSummary summary;
   if (!mocap::RunDaemon(pipeline.get(), options, &g_stop, &summary, &error)) {
     return std::cerr << "mocapd: " << error << "\n", 1;
   }
-  std::cout << "{\"frames\": " << summary.frames << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
+  std::cout << "{\"frames\": " << summary.frames
+            << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
             << ", \"latency_p99_ms\": " << Percentile(summary.latency_ms, 0.99)
-            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0) << ", \"dropped\": {";
+            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0)
+            << ", \"dropped\": {";
   bool first = true;
   for (const auto& [reason, n] : summary.dropped) {
     std::cout << (first ? "" : ", ") << "\"" << reason << "\": " << n;

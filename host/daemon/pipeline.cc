@@ -17,11 +17,16 @@ double Percentile(std::vector<double> v, double p) {
 
 v1::PoseFrame::Status ToProto(SolveStatus s) {
   switch (s) {
-    case SolveStatus::kOk: return v1::PoseFrame::STATUS_OK;
-    case SolveStatus::kInitialised: return v1::PoseFrame::STATUS_INITIALISED;
-    case SolveStatus::kNoObservations: return v1::PoseFrame::STATUS_NO_OBSERVATIONS;
-    case SolveStatus::kRejectedFrame: return v1::PoseFrame::STATUS_REJECTED_FRAME;
-    case SolveStatus::kFailed: return v1::PoseFrame::STATUS_FAILED;
+    case SolveStatus::kOk:
+      return v1::PoseFrame::STATUS_OK;
+    case SolveStatus::kInitialised:
+      return v1::PoseFrame::STATUS_INITIALISED;
+    case SolveStatus::kNoObservations:
+      return v1::PoseFrame::STATUS_NO_OBSERVATIONS;
+    case SolveStatus::kRejectedFrame:
+      return v1::PoseFrame::STATUS_REJECTED_FRAME;
+    case SolveStatus::kFailed:
+      return v1::PoseFrame::STATUS_FAILED;
   }
   return v1::PoseFrame::STATUS_FAILED;
 }
@@ -29,8 +34,8 @@ v1::PoseFrame::Status ToProto(SolveStatus s) {
 }  // namespace
 
 std::unique_ptr<HostPipeline> HostPipeline::Create(Session session, std::string* error) {
-  auto solver = Solver::Create(session.skeleton, session.rig, session.layout, session.imus, session.prior,
-                               session.solver, error);
+  auto solver = Solver::Create(session.skeleton, session.rig, session.layout, session.imus,
+                               session.prior, session.solver, error);
   if (!solver) return nullptr;
   return std::unique_ptr<HostPipeline>(new HostPipeline(std::move(session), std::move(solver)));
 }
@@ -38,10 +43,12 @@ std::unique_ptr<HostPipeline> HostPipeline::Create(Session session, std::string*
 HostPipeline::HostPipeline(Session session, std::unique_ptr<Solver> solver)
     : session_(std::move(session)),
       solver_(std::move(solver)),
-      sync_(static_cast<int>(session_.rig.cameras.size()), static_cast<int>(session_.imus.size()), session_.sync),
+      sync_(static_cast<int>(session_.rig.cameras.size()), static_cast<int>(session_.imus.size()),
+            session_.sync),
       camera_stats_(session_.rig.cameras.size()),
       imu_stats_(session_.imus.size()) {
-  for (size_t c = 0; c < session_.rig.cameras.size(); ++c) camera_index_[session_.rig.cameras[c].name] = c;
+  for (size_t c = 0; c < session_.rig.cameras.size(); ++c)
+    camera_index_[session_.rig.cameras[c].name] = c;
   for (size_t i = 0; i < session_.imus.size(); ++i) imu_index_[session_.imus[i].name] = i;
 }
 
@@ -51,37 +58,48 @@ bool HostPipeline::Drop(const std::string& reason, const std::string& detail, st
   return false;
 }
 
-void HostPipeline::Count(StreamStats* stats, uint64_t counter, uint64_t modulo, int64_t latency_ns) {
+void HostPipeline::Count(StreamStats* stats, uint64_t counter, uint64_t modulo,
+                         int64_t latency_ns) {
   stats->received_in_period++;
   if (stats->last_counter) {
-    const uint64_t step = modulo ? (counter + modulo - *stats->last_counter) % modulo : counter - *stats->last_counter;
+    const uint64_t step = modulo ? (counter + modulo - *stats->last_counter) % modulo
+                                 : counter - *stats->last_counter;
     if (step > 1 && step < (modulo ? modulo / 2 : 1u << 20)) stats->lost += step - 1;
   }
-  if (!stats->last_counter || counter > *stats->last_counter || modulo) stats->last_counter = counter;
+  if (!stats->last_counter || counter > *stats->last_counter || modulo)
+    stats->last_counter = counter;
   stats->latency_ms.push_back(1e-6 * static_cast<double>(latency_ns));
 }
 
-bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns, std::string* why) {
+bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
+                        std::string* why) {
   wire::Decoded d = wire::DecodeMessage(type, payload);
   if (!d.message) return Drop(wire::ToString(d.reason), d.detail, why);
-  if (auto* frame = dynamic_cast<const v1::KeypointFrame*>(d.message.get())) return FeedKeypoints(*frame, now_ns, why);
-  if (auto* batch = dynamic_cast<const v1::ImuBatch*>(d.message.get())) return FeedImus(*batch, now_ns, why);
+  if (auto* frame = dynamic_cast<const v1::KeypointFrame*>(d.message.get()))
+    return FeedKeypoints(*frame, now_ns, why);
+  if (auto* batch = dynamic_cast<const v1::ImuBatch*>(d.message.get()))
+    return FeedImus(*batch, now_ns, why);
   return Drop("not_an_input", wire::TypeName(*d.message) + " is not an input of the host", why);
 }
 
 bool HostPipeline::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, std::string* why) {
   const auto it = camera_index_.find(frame.camera_id());
-  if (it == camera_index_.end()) return Drop("unknown_source", "camera '" + frame.camera_id() + "' is not in the rig", why);
+  if (it == camera_index_.end())
+    return Drop("unknown_source", "camera '" + frame.camera_id() + "' is not in the rig", why);
   const int c = it->second;
   StreamStats& stats = camera_stats_[c];
   const int n = session_.layout.size();
-  const bool wrong_layout = frame.detected() && !frame.persons().empty() && frame.keypoint_layout() != session_.layout.name;
+  const bool wrong_layout = frame.detected() && !frame.persons().empty() &&
+                            frame.keypoint_layout() != session_.layout.name;
   const bool wrong_size = std::any_of(frame.persons().begin(), frame.persons().end(),
                                       [&](const v1::KeypointPerson& p) { return p.x_size() != n; });
   if (wrong_layout || (frame.detected() && wrong_size)) {
     stats.invalid++;
-    return Drop("invalid", frame.camera_id() + ": layout '" + frame.keypoint_layout() + "' or keypoint count is not the session's " +
-                               session_.layout.name + " (" + std::to_string(n) + ")", why);
+    return Drop("invalid",
+                frame.camera_id() + ": layout '" + frame.keypoint_layout() +
+                    "' or keypoint count is not the session's " + session_.layout.name + " (" +
+                    std::to_string(n) + ")",
+                why);
   }
   Count(&stats, frame.frame_index(), 0, now_ns - frame.capture_time_ns());
   CameraInput in;
@@ -94,7 +112,8 @@ bool HostPipeline::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns,
     for (int k = 0; k < n; ++k) in.keypoints[k] = Keypoint2D{p.x(k), p.y(k), p.confidence(k)};
   }
   if (!sync_.AddCamera(std::move(in), now_ns)) {
-    return Drop("late_or_duplicate", frame.camera_id() + " frame " + std::to_string(frame.frame_index()), why);
+    return Drop("late_or_duplicate",
+                frame.camera_id() + " frame " + std::to_string(frame.frame_index()), why);
   }
   return true;
 }
@@ -120,7 +139,10 @@ bool HostPipeline::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::stri
   }
   if (unknown) {
     dropped_["unknown_source"] += unknown - 1;
-    return Drop("unknown_source", std::to_string(unknown) + " samples of sensors not in the IMU set (hub " + batch.hub_id() + ")", why);
+    return Drop("unknown_source",
+                std::to_string(unknown) + " samples of sensors not in the IMU set (hub " +
+                    batch.hub_id() + ")",
+                why);
   }
   return true;
 }
@@ -133,7 +155,8 @@ int HostPipeline::ChooseSubject(const v1::KeypointFrame& frame, int camera) cons
     ForwardKinematics(session_.skeleton, solver_->pose().data(), &pose);
     for (const Site& s : session_.layout.sites) {
       Eigen::Vector2d px(NAN, NAN);
-      session_.rig.cameras[camera].Project(pose.position[s.bone] + pose.rotation[s.bone] * s.offset, &px);
+      session_.rig.cameras[camera].Project(pose.position[s.bone] + pose.rotation[s.bone] * s.offset,
+                                           &px);
       predicted.push_back(px);
     }
   }
@@ -176,7 +199,8 @@ std::vector<SolvedFrame> HostPipeline::Solve(int64_t now_ns) {
       v1::JointTransform* j = p.add_joints();
       const Eigen::Quaterniond q(pose.rotation[b]);
       j->set_name(session_.skeleton.bone(b).name);
-      j->set_px(pose.position[b].x()), j->set_py(pose.position[b].y()), j->set_pz(pose.position[b].z());
+      j->set_px(pose.position[b].x()), j->set_py(pose.position[b].y()),
+          j->set_pz(pose.position[b].z());
       j->set_qw(q.w()), j->set_qx(q.x()), j->set_qy(q.y()), j->set_qz(q.z());
     }
     v1::TermCosts* costs = p.mutable_costs();
@@ -188,7 +212,8 @@ std::vector<SolvedFrame> HostPipeline::Solve(int64_t now_ns) {
     p.set_iterations(r.iterations);
     p.set_solve_time_ms(r.solve_time_ms);
     p.set_quality_flags(r.flags);
-    for (const CameraObservation& c : f.observations.cameras) p.add_cameras(session_.rig.cameras[c.camera].name);
+    for (const CameraObservation& c : f.observations.cameras)
+      p.add_cameras(session_.rig.cameras[c.camera].name);
     for (const ImuObservation& i : f.observations.imus) p.add_imus(session_.imus[i.imu].name);
     frames_in_period_++;
     out.push_back(std::move(s));
@@ -197,12 +222,15 @@ std::vector<SolvedFrame> HostPipeline::Solve(int64_t now_ns) {
 }
 
 v1::Health HostPipeline::Health(int64_t now_ns) {
-  const double period_s = period_start_ns_ ? std::max(1e-3, 1e-9 * static_cast<double>(now_ns - *period_start_ns_)) : 1.0;
+  const double period_s =
+      period_start_ns_ ? std::max(1e-3, 1e-9 * static_cast<double>(now_ns - *period_start_ns_))
+                       : 1.0;
   period_start_ns_ = now_ns;
   v1::Health h;
   h.set_source("host");
   h.set_time_ns(now_ns);
-  const auto add = [&](const std::string& name, bool active, StreamStats& st, const StreamCounts* counts) {
+  const auto add = [&](const std::string& name, bool active, StreamStats& st,
+                       const StreamCounts* counts) {
     v1::StreamHealth* s = h.add_streams();
     s->set_stream(name);
     s->set_active(active);
@@ -221,12 +249,15 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
     st.latency_ms.clear();
   };
   for (size_t c = 0; c < camera_stats_.size(); ++c) {
-    add("camera/" + session_.rig.cameras[c].name, sync_.CameraActive(c, now_ns), camera_stats_[c], &sync_.camera_counts(c));
+    add("camera/" + session_.rig.cameras[c].name, sync_.CameraActive(c, now_ns), camera_stats_[c],
+        &sync_.camera_counts(c));
   }
   for (size_t i = 0; i < imu_stats_.size(); ++i) {
-    add("imu/" + session_.imus[i].name, sync_.ImuActive(i, now_ns), imu_stats_[i], &sync_.imu_counts(i));
+    add("imu/" + session_.imus[i].name, sync_.ImuActive(i, now_ns), imu_stats_[i],
+        &sync_.imu_counts(i));
   }
-  for (auto& [hub, stats] : hub_stats_) add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);
+  for (auto& [hub, stats] : hub_stats_)
+    add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);
   uint64_t malformed = 0;
   for (const auto& [reason, n] : dropped_) malformed += reason == "late_or_duplicate" ? 0 : n;
   StreamStats input;

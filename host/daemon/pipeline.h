@@ -33,9 +33,12 @@ class HostPipeline {
 
   // One message as received; now_ns is its arrival on the shared timebase. False when it
   // was dropped: *why (may be null) says why, for a log line.
-  bool Feed(std::string_view type, std::string_view payload, int64_t now_ns, std::string* why = nullptr);
+  bool Feed(std::string_view type, std::string_view payload, int64_t now_ns,
+            std::string* why = nullptr);
   // Counts a message the transport could not even split into (type, payload).
-  bool Reject(const std::string& reason, const std::string& detail, std::string* why) { return Drop(reason, detail, why); }
+  bool Reject(const std::string& reason, const std::string& detail, std::string* why) {
+    return Drop(reason, detail, why);
+  }
   // Solves the frames ready at now_ns, oldest first.
   std::vector<SolvedFrame> Solve(int64_t now_ns);
   // The publisher reports each frame's latency (publication - last input), milliseconds.

@@ -61,7 +61,8 @@ struct Studio {
       v1::ImuSample* s = b.add_samples();
       s->set_sensor_id(scene.imus[o.imu].name);
       s->set_sample_time_ns(kT0 + k * kFrame);
-      s->set_qw(o.orientation.w()), s->set_qx(o.orientation.x()), s->set_qy(o.orientation.y()), s->set_qz(o.orientation.z());
+      s->set_qw(o.orientation.w()), s->set_qx(o.orientation.x()), s->set_qy(o.orientation.y()),
+          s->set_qz(o.orientation.z());
       s->set_status(v1::ImuSample::STATUS_ACCELERATION_INVALID);  // Render gives no accelerations
       s->set_packet_counter(k);
     }
@@ -76,7 +77,8 @@ TEST(Pipeline, PosesFollowTheStreamsAndBadMessagesAreCountedAndDropped) {
   for (int k = 0; k < 40; ++k) {
     const int64_t now = kT0 + k * kFrame + kMs;
     EXPECT_TRUE(pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now));
-    for (int c = 0; c < 4; ++c) EXPECT_TRUE(pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now));
+    for (int c = 0; c < 4; ++c)
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now));
     if (k == 10) {  // garbage of every kind, between good messages
       v1::KeypointFrame nan_frame;
       nan_frame.ParseFromString(studio.Keypoints(k + 1, 0));
@@ -91,7 +93,8 @@ TEST(Pipeline, PosesFollowTheStreamsAndBadMessagesAreCountedAndDropped) {
       stranger.set_camera_id(studio.scene.rig.cameras[0].name);
       stranger.set_keypoint_layout("coco17");
       EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", stranger.SerializeAsString(), now));
-      EXPECT_FALSE(pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k - 5, 1), now));  // late
+      EXPECT_FALSE(
+          pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k - 5, 1), now));  // late
     }
     for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
   }
@@ -101,7 +104,8 @@ TEST(Pipeline, PosesFollowTheStreamsAndBadMessagesAreCountedAndDropped) {
     EXPECT_EQ(p.capture_time_ns(), kT0 + static_cast<int64_t>(k) * kFrame);
     EXPECT_EQ(p.cameras_size(), 4);
     EXPECT_EQ(p.imus_size(), 13);
-    const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
+    const Eigen::VectorXd theta =
+        Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
     if (k >= 2) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.01) << k;
   }
   const auto& dropped = pipeline->dropped();
@@ -120,19 +124,23 @@ TEST(Pipeline, AStoppedCameraOrImuDegradesTheSolveWhichRecoversWhenItReturns) {
   Studio studio;
   auto pipeline = studio.Pipeline();
   std::vector<SolvedFrame> out;
-  const auto off = [](int k) { return k >= 25 && k < 60; };  // camera 2 and the lower-back IMU unplugged
+  const auto off = [](int k) {
+    return k >= 25 && k < 60;
+  };  // camera 2 and the lower-back IMU unplugged
   for (int k = 0; k < 90; ++k) {
     const int64_t now = kT0 + k * kFrame + kMs;
     pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k, off(k) ? "lower_back" : ""), now);
     for (int c = 0; c < 4; ++c) {
-      if (!(c == 2 && off(k))) pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
+      if (!(c == 2 && off(k)))
+        pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
     }
     for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
   }
   ASSERT_GE(out.size(), 89u);  // the last may wait for its deadline
   for (size_t k = 2; k < out.size(); ++k) {
     const v1::PoseFrame& p = out[k].pose;
-    const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
+    const Eigen::VectorXd theta =
+        Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
     EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.01) << k;
     EXPECT_EQ(p.cameras_size(), off(static_cast<int>(k)) ? 3 : 4) << k;
     EXPECT_EQ(p.imus_size(), off(static_cast<int>(k)) ? 12 : 13) << k;
@@ -148,8 +156,10 @@ TEST(Pipeline, ASessionFileThatIsWrongSaysWhat) {
   EXPECT_FALSE(LoadSession("/nonexistent/session.json", &s, &error));
   EXPECT_NE(error.find("/nonexistent/session.json"), std::string::npos);
   const std::string path = ::testing::TempDir() + "/session.json";
-  std::ofstream(path) << R"({"format": "mocap.session/1", "skeleton": ")" << testing::DataPath("skeleton_default.json")
-                      << R"(", "rig": "missing_rig.json", "layout": "x", "imus": "y", "inputs": [], "output": ""})";
+  std::ofstream(path)
+      << R"({"format": "mocap.session/1", "skeleton": ")"
+      << testing::DataPath("skeleton_default.json")
+      << R"(", "rig": "missing_rig.json", "layout": "x", "imus": "y", "inputs": [], "output": ""})";
   EXPECT_FALSE(LoadSession(path, &s, &error));
   EXPECT_NE(error.find("missing_rig.json"), std::string::npos) << error;
 }

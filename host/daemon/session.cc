@@ -19,18 +19,25 @@ bool ReadSync(const json& j, SyncOptions* sync, std::string* error) {
   ns("stale_after_ms", &sync->stale_after_ns);
   ns("imu_max_gap_ms", &sync->imu_max_gap_ns);
   ns("imu_max_hold_ms", &sync->imu_max_hold_ns);
-  if (j.contains("imu_only_rate_hz")) sync->imu_only_rate_hz = j.at("imu_only_rate_hz").get<double>();
+  if (j.contains("imu_only_rate_hz"))
+    sync->imu_only_rate_hz = j.at("imu_only_rate_hz").get<double>();
   return sync->IsValid(error);
 }
 
 bool ReadSolver(const json& j, SolverOptions* options, std::string* error) {
   for (const auto& [key, value] : j.items()) {
-    if (key == "function_tolerance") options->function_tolerance = value.get<double>();
-    else if (key == "max_iterations") options->max_iterations = value.get<int>();
-    else if (key == "predict_motion") options->predict_motion = value.get<bool>();
-    else if (key == "velocity_gain") options->velocity_gain = value.get<double>();
-    else if (key == "max_keypoint_cost") options->max_keypoint_cost = value.get<double>();
-    else return *error = "unknown solver option '" + key + "'", false;
+    if (key == "function_tolerance")
+      options->function_tolerance = value.get<double>();
+    else if (key == "max_iterations")
+      options->max_iterations = value.get<int>();
+    else if (key == "predict_motion")
+      options->predict_motion = value.get<bool>();
+    else if (key == "velocity_gain")
+      options->velocity_gain = value.get<double>();
+    else if (key == "max_keypoint_cost")
+      options->max_keypoint_cost = value.get<double>();
+    else
+      return *error = "unknown solver option '" + key + "'", false;
   }
   return options->IsValid(error);
 }
@@ -47,14 +54,17 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
   const std::filesystem::path base = std::filesystem::path(path).parent_path();
   const auto file = [&](const char* key) { return (base / j.at(key).get<std::string>()).string(); };
   try {
-    if (j.value("format", "") != "mocap.session/1") throw std::runtime_error("format is not mocap.session/1");
+    if (j.value("format", "") != "mocap.session/1")
+      throw std::runtime_error("format is not mocap.session/1");
     Session s;
-    if (!LoadSkeletonJson(file("skeleton"), &s.skeleton, error) || !LoadRigJson(file("rig"), &s.rig, error) ||
+    if (!LoadSkeletonJson(file("skeleton"), &s.skeleton, error) ||
+        !LoadRigJson(file("rig"), &s.rig, error) ||
         !LoadImuSitesJson(file("imus"), s.skeleton, &s.imus, error)) {
       throw std::runtime_error(*error);
     }
     KeypointLayout layout;
-    if (!LoadKeypointLayoutJson(file("layout"), s.skeleton, &layout, error)) throw std::runtime_error(*error);
+    if (!LoadKeypointLayoutJson(file("layout"), s.skeleton, &layout, error))
+      throw std::runtime_error(*error);
     s.layout = layout.ScaledTo(s.skeleton);
     if (j.contains("prior") && !j.at("prior").is_null()) {
       PosePrior prior;
@@ -64,8 +74,10 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
     s.inputs = j.at("inputs").get<std::vector<std::string>>();
     s.output = j.at("output").get<std::string>();
     if (s.inputs.empty()) throw std::runtime_error("no inputs");
-    if (j.contains("sync") && !ReadSync(j.at("sync"), &s.sync, error)) throw std::runtime_error(*error);
-    if (j.contains("solver") && !ReadSolver(j.at("solver"), &s.solver, error)) throw std::runtime_error(*error);
+    if (j.contains("sync") && !ReadSync(j.at("sync"), &s.sync, error))
+      throw std::runtime_error(*error);
+    if (j.contains("solver") && !ReadSolver(j.at("solver"), &s.solver, error))
+      throw std::runtime_error(*error);
     *out = std::move(s);
     return true;
   } catch (const std::exception& e) {

@@ -21,7 +21,8 @@ bool AllFinite(const Values& values) {
 
 // Content checks of a parsed message; sets *detail and returns the reason on failure.
 DropReason Check(const v1::KeypointFrame& m, std::string* detail) {
-  if (m.camera_id().empty()) return *detail = "KeypointFrame without camera_id", DropReason::kInvalid;
+  if (m.camera_id().empty())
+    return *detail = "KeypointFrame without camera_id", DropReason::kInvalid;
   for (const auto& p : m.persons()) {
     if (p.x_size() != p.y_size() || p.x_size() != p.confidence_size()) {
       *detail = m.camera_id() + ": x, y, confidence of different lengths";
@@ -37,16 +38,20 @@ DropReason Check(const v1::KeypointFrame& m, std::string* detail) {
 
 DropReason Check(const v1::ImuBatch& m, std::string* detail) {
   for (const auto& s : m.samples()) {
-    if (s.sensor_id().empty()) return *detail = m.hub_id() + ": sample without sensor_id", DropReason::kInvalid;
+    if (s.sensor_id().empty())
+      return *detail = m.hub_id() + ": sample without sensor_id", DropReason::kInvalid;
     for (double v : {s.qw(), s.qx(), s.qy(), s.qz(), s.ax(), s.ay(), s.az()}) {
-      if (!std::isfinite(v)) return *detail = m.hub_id() + "/" + s.sensor_id() + " holds NaN or inf", DropReason::kNotFinite;
+      if (!std::isfinite(v))
+        return *detail = m.hub_id() + "/" + s.sensor_id() + " holds NaN or inf",
+               DropReason::kNotFinite;
     }
   }
   return DropReason::kNone;
 }
 
 DropReason Check(const v1::PoseFrame& m, std::string* detail) {
-  if (!AllFinite(m.theta())) return *detail = "PoseFrame theta holds NaN or inf", DropReason::kNotFinite;
+  if (!AllFinite(m.theta()))
+    return *detail = "PoseFrame theta holds NaN or inf", DropReason::kNotFinite;
   return DropReason::kNone;
 }
 
@@ -70,13 +75,20 @@ Decoded Parse(std::string_view payload) {
 
 const char* ToString(DropReason reason) {
   switch (reason) {
-    case DropReason::kNone: return "none";
-    case DropReason::kUnknownType: return "unknown_type";
-    case DropReason::kWrongVersion: return "wrong_version";
-    case DropReason::kOversized: return "oversized";
-    case DropReason::kUndecodable: return "undecodable";
-    case DropReason::kNotFinite: return "not_finite";
-    case DropReason::kInvalid: return "invalid";
+    case DropReason::kNone:
+      return "none";
+    case DropReason::kUnknownType:
+      return "unknown_type";
+    case DropReason::kWrongVersion:
+      return "wrong_version";
+    case DropReason::kOversized:
+      return "oversized";
+    case DropReason::kUndecodable:
+      return "undecodable";
+    case DropReason::kNotFinite:
+      return "not_finite";
+    case DropReason::kInvalid:
+      return "invalid";
   }
   return "?";
 }
@@ -96,7 +108,8 @@ Decoded DecodeMessage(std::string_view type, std::string_view payload) {
   if (type == "mocap.v1.ImuBatch") return Parse<v1::ImuBatch>(payload);
   if (type == "mocap.v1.PoseFrame") return Parse<v1::PoseFrame>(payload);
   if (type == "mocap.v1.Health") return Parse<v1::Health>(payload);
-  const std::string_view package = type.substr(0, type.rfind('.') == std::string_view::npos ? 0 : type.rfind('.'));
+  const std::string_view package =
+      type.substr(0, type.rfind('.') == std::string_view::npos ? 0 : type.rfind('.'));
   const bool other_version = package.substr(0, 6) == "mocap." && package != kVersion;
   out.reason = other_version ? DropReason::kWrongVersion : DropReason::kUnknownType;
   out.detail = "message type '" + std::string(type.substr(0, 80)) + "'";

@@ -14,7 +14,15 @@ namespace mocap::wire {
 inline constexpr std::string_view kVersion = "mocap.v1";
 inline constexpr size_t kMaxPayload = 1 << 20;  // bytes
 
-enum class DropReason { kNone, kUnknownType, kWrongVersion, kOversized, kUndecodable, kNotFinite, kInvalid };
+enum class DropReason {
+  kNone,
+  kUnknownType,
+  kWrongVersion,
+  kOversized,
+  kUndecodable,
+  kNotFinite,
+  kInvalid
+};
 const char* ToString(DropReason reason);
 
 struct Decoded {

@@ -38,10 +38,12 @@ TEST(Wire, GoldenVectorsDecodeToTheirExpectedMessagesAndReencodeToTheSameBytes) 
     ASSERT_TRUE(d.message) << d.detail;
     EXPECT_EQ(d.message->SerializeAsString(), bytes);  // unknown fields kept by a relay
     std::unique_ptr<google::protobuf::Message> expected(d.message->New());
-    ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(Read(name + ".json"), expected.get()).ok());
+    ASSERT_TRUE(
+        google::protobuf::util::JsonStringToMessage(Read(name + ".json"), expected.get()).ok());
     d.message->DiscardUnknownFields();
     EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(*d.message, *expected))
-        << d.message->DebugString() << "\nvs\n" << expected->DebugString();
+        << d.message->DebugString() << "\nvs\n"
+        << expected->DebugString();
     ++checked;
   }
   EXPECT_GE(checked, 6);
@@ -52,24 +54,30 @@ TEST(Wire, BadMessagesComeBackWithTheirReason) {
   frame.set_camera_id("cam0");
   auto* p = frame.add_persons();
   p->add_x(1), p->add_y(2), p->add_confidence(NAN);
-  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason, DropReason::kNotFinite);
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason,
+            DropReason::kNotFinite);
   p->set_confidence(0, 1.0);
   EXPECT_TRUE(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).message);
   p->add_x(3);
-  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason, DropReason::kInvalid);
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason,
+            DropReason::kInvalid);
   EXPECT_EQ(DecodeMessage("mocap.v2.KeypointFrame", "").reason, DropReason::kWrongVersion);
   EXPECT_EQ(DecodeMessage("something.Else", "").reason, DropReason::kUnknownType);
-  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", std::string(kMaxPayload + 1, 'x')).reason, DropReason::kOversized);
-  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", "\xff\xff\xff").reason, DropReason::kUndecodable);
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", std::string(kMaxPayload + 1, 'x')).reason,
+            DropReason::kOversized);
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", "\xff\xff\xff").reason,
+            DropReason::kUndecodable);
   v1::ImuBatch batch;
   batch.set_hub_id("hub0");
   auto* s = batch.add_samples();
   s->set_sensor_id("pelvis");
   s->set_ax(INFINITY);
-  EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason, DropReason::kNotFinite);
+  EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason,
+            DropReason::kNotFinite);
   s->set_ax(0);
   s->clear_sensor_id();
-  EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason, DropReason::kInvalid);
+  EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason,
+            DropReason::kInvalid);
 }
 
 }  // namespace

@@ -439,11 +439,13 @@ PYBIND11_MODULE(_core, m) {
               frames = p.Solve(now_ns);
             }
             py::list out;
-            for (const SolvedFrame& f : frames) out.append(py::make_tuple(py::bytes(f.pose.SerializeAsString()), f.last_input_ns));
+            for (const SolvedFrame& f : frames)
+              out.append(py::make_tuple(py::bytes(f.pose.SerializeAsString()), f.last_input_ns));
             return out;
           },
           py::arg("now_ns"), "Frames ready at now_ns: [(PoseFrame bytes, last input arrival ns)].")
-      .def("health", [](HostPipeline& p, int64_t now_ns) { return py::bytes(p.Health(now_ns).SerializeAsString()); })
+      .def("health", [](HostPipeline& p,
+                        int64_t now_ns) { return py::bytes(p.Health(now_ns).SerializeAsString()); })
       .def_property_readonly("dropped", &HostPipeline::dropped)
       .def_property_readonly("frames_solved", &HostPipeline::frames_solved);
 }

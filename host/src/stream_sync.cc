@@ -20,7 +20,8 @@ StreamSynchroniser::StreamSynchroniser(int num_cameras, int num_imus, SyncOption
 
 bool StreamSynchroniser::Active(const StreamCounts& counts, int64_t now_ns) const {
   // A configured stream is expected from the first input of any stream on.
-  const std::optional<int64_t>& last = counts.last_arrival_ns ? counts.last_arrival_ns : first_arrival_ns_;
+  const std::optional<int64_t>& last =
+      counts.last_arrival_ns ? counts.last_arrival_ns : first_arrival_ns_;
   return last && now_ns - *last <= options_.stale_after_ns;
 }
 
@@ -104,7 +105,7 @@ void StreamSynchroniser::ClockFromImus(int64_t now_ns) {
   }
   if (!newest) return;
   const auto period = static_cast<int64_t>(1e9 / options_.imu_only_rate_hz);
-  int64_t t = !pending_.empty() ? pending_.back().time_ns + period
+  int64_t t = !pending_.empty()   ? pending_.back().time_ns + period
               : last_released_ns_ ? *last_released_ns_ + period
                                   : *first;
   t = std::max(t, *newest - options_.max_wait_ns - period);  // after a long pause: no backlog
@@ -158,7 +159,8 @@ SyncedFrame StreamSynchroniser::Release(Group group, int64_t now_ns) {
   return out;
 }
 
-std::optional<std::pair<ImuObservation, int64_t>> StreamSynchroniser::Interpolate(int i, int64_t t) const {
+std::optional<std::pair<ImuObservation, int64_t>> StreamSynchroniser::Interpolate(int i,
+                                                                                  int64_t t) const {
   const auto& samples = imus_[i].samples;
   auto after = std::lower_bound(samples.begin(), samples.end(), t,
                                 [](const Sample& s, int64_t v) { return s.input.time_ns < v; });
@@ -184,8 +186,10 @@ std::optional<std::pair<ImuObservation, int64_t>> StreamSynchroniser::Interpolat
     o.has_acceleration = s0->input.has_acceleration && s1->input.has_acceleration;
     return std::make_pair(o, std::max(s0->arrival_ns, s1->arrival_ns));
   }
-  if (s0 && t - s0->input.time_ns <= options_.imu_max_hold_ns) return std::make_pair(from(*s0), s0->arrival_ns);
-  if (s1 && s1->input.time_ns - t <= options_.imu_max_hold_ns) return std::make_pair(from(*s1), s1->arrival_ns);
+  if (s0 && t - s0->input.time_ns <= options_.imu_max_hold_ns)
+    return std::make_pair(from(*s0), s0->arrival_ns);
+  if (s1 && s1->input.time_ns - t <= options_.imu_max_hold_ns)
+    return std::make_pair(from(*s1), s1->arrival_ns);
   return std::nullopt;
 }
 

@@ -48,7 +48,8 @@ TEST(StreamSync, ReleasesAFrameWhenEveryStreamHasDeliveredAndInterpolatesTheImu)
   ASSERT_EQ(f.observations.imus.size(), 1u);
   const double s = 1e-9 * static_cast<double>(t - kT0);
   const Eigen::Quaterniond truth(Eigen::AngleAxisd(s, Eigen::Vector3d::UnitZ()));
-  EXPECT_LT(f.observations.imus[0].orientation.angularDistance(truth), 1e-9);  // slerp is exact here
+  EXPECT_LT(f.observations.imus[0].orientation.angularDistance(truth),
+            1e-9);  // slerp is exact here
   EXPECT_NEAR(f.observations.imus[0].acceleration.x(), s, 1e-9);
   EXPECT_EQ(sync.frames_forced(), 0u);
 }
@@ -163,7 +164,8 @@ TEST(StreamSync, WithoutCamerasTheImusClockTheFrames) {
     for (auto& f : sync.TakeReady(s + kMs)) frames.push_back(std::move(f));
   }
   ASSERT_GE(frames.size(), 10u);
-  for (size_t k = 1; k < frames.size(); ++k) EXPECT_EQ(frames[k].time_ns - frames[k - 1].time_ns, 20 * kMs);
+  for (size_t k = 1; k < frames.size(); ++k)
+    EXPECT_EQ(frames[k].time_ns - frames[k - 1].time_ns, 20 * kMs);
   for (const auto& f : frames) EXPECT_EQ(f.observations.imus.size(), 1u);
 }
 
@@ -171,7 +173,7 @@ TEST(StreamSync, AnOverfullQueueHandsOverItsOldestFrame) {
   SyncOptions options;
   options.max_pending_frames = 4;
   StreamSynchroniser sync(2, 0, options);
-  sync.AddCamera(Cam(1, kT0), kT0);  // camera 1 is active but never delivers again
+  sync.AddCamera(Cam(1, kT0), kT0);          // camera 1 is active but never delivers again
   EXPECT_TRUE(sync.TakeReady(kT0).empty());  // camera 0 is expected too
   for (int k = 1; k <= 6; ++k) sync.AddCamera(Cam(0, kT0 + k * kFrame), kT0);  // clock stuck at kT0
   auto ready = sync.TakeReady(kT0);

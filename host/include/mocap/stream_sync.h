@@ -42,7 +42,7 @@ struct SyncOptions {
 struct CameraInput {
   int camera = 0;  // index into the rig
   int64_t time_ns = 0;
-  bool detected = true;                // false: the frame only clocks the solve (HS mode)
+  bool detected = true;               // false: the frame only clocks the solve (HS mode)
   std::vector<Keypoint2D> keypoints;  // the subject's, in layout order; empty: nobody
 };
 
@@ -58,8 +58,8 @@ struct SyncedFrame {
   int64_t time_ns = 0;
   // timestamp: seconds since the first frame (epoch_ns()).
   FrameObservations observations;
-  int64_t last_input_ns = 0;       // arrival of the newest input the frame used
-  int64_t released_ns = 0;         // `now` when it was handed over
+  int64_t last_input_ns = 0;         // arrival of the newest input the frame used
+  int64_t released_ns = 0;           // `now` when it was handed over
   std::vector<int> cameras_clocked;  // cameras that delivered the frame (with or without keypoints)
 };
 

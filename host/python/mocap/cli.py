@@ -14,6 +14,10 @@ from mocap.errors import DataMissingError, InputError, MocapError
 def _bench(args: argparse.Namespace) -> int:
     from mocap import bench
 
+    if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
+        from mocap import live
+
+        print(json.dumps(live.bench(seconds=args.live_seconds)), flush=True)
     bench.pin_to_one_core()
     if "solver" in args.only:
         try:
@@ -64,6 +68,37 @@ def _replay(args: argparse.Namespace) -> int:
 
     sent = recording.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics)
     print(json.dumps({"file": args.file, "sent": sent}), flush=True)
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap import demo
+
+    result = demo.run(Path(args.out), args.seconds, vmc=args.vmc, seed=args.seed, record=args.record)
+    return 0 if result["solved"] else 1
+
+
+def _solve(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from mocap import _core, offline
+    from mocap.export.bvh import write_bvh
+    from mocap.export.joints_csv import write_joints_csv
+
+    poses, dropped = offline.solve_recording(Path(args.recording), Path(args.session))
+    if not poses:
+        raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped})")
+    skeleton = _core.Skeleton.load(args.skeleton or str(Path(args.session).parent / "skeleton.json"))
+    thetas = np.array([list(p.theta) for p in poses])
+    write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))
+    if args.csv:
+        times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
+        write_joints_csv(args.csv, skeleton, thetas, times)
+    print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped}), flush=True)
     return 0
 
 
@@ -122,7 +157,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
 
     b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
-    b.add_argument("--only", nargs="+", default=["solver"], choices=["solver"], help="benchmarks to run")
+    b.add_argument("--only", nargs="+", default=["solver", "live"], choices=["solver", "live"],
+                   help="benchmarks to run (default both)")
+    b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
@@ -170,6 +207,23 @@ def build_parser() -> argparse.ArgumentParser:
     i = sub.add_parser("imu-stats", help="noise and bias figures of the real IMU recordings (for the simulator)")
     i.add_argument("--imu", default=None, help="folder of the recordings (default ../shared/data/imu)")
     i.set_defaults(func=_imu_stats)
+
+    d = sub.add_parser("demo", help="the live system on a simulated studio: 8 cameras + 13 IMUs over loopback, "
+                       "mocapd solving in real time; writes OUT/demo.bvh, demo_joints.csv, report.md")
+    d.add_argument("--out", default="out", help="output folder (default out)")
+    d.add_argument("--seconds", type=float, default=20.0, help="length of the take (default 20)")
+    d.add_argument("--vmc", default=None, metavar="HOST:PORT", help="also stream the poses as VMC (OSC/UDP)")
+    d.add_argument("--record", default=None, metavar="FILE", help="record every stream to this MCAP file")
+    d.add_argument("--seed", type=int, default=0)
+    d.set_defaults(func=_demo)
+
+    so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline; write a BVH")
+    so.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
+    so.add_argument("--session", required=True, help="the session file the take was captured with")
+    so.add_argument("--out", required=True, help="BVH to write")
+    so.add_argument("--csv", default=None, help="also write joint positions as CSV")
+    so.add_argument("--skeleton", default=None, help="skeleton file (default: skeleton.json beside the session)")
+    so.set_defaults(func=_solve)
 
     rec = sub.add_parser("record", help="record the streams of ZeroMQ publishers to an MCAP file (Foxglove)")
     rec.add_argument("--connect", nargs="+", required=True, metavar="EP", help="publisher endpoints, tcp://host:port")
