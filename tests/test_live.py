@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import zmq
 
-from mocap import live, offline, transport, wire
+from mocap import bvh, live, offline, recording, transport, wire
+from mocap.errors import InputError
 
 pytestmark = pytest.mark.skipif(not live.MOCAPD.exists(), reason="mocapd is not built (make build)")
 
@@ -40,8 +41,9 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     stale = [s for h in run.healths for s in h.streams if s.stream == "camera/cam3" and not s.active]
     assert stale, "Health never reported the unplugged camera inactive"
 
-    # The recording solved offline through the same pipeline gives the live poses back.
-    poses, _ = offline.solve_recording(tmp_path / "take.mcap", studio.session)
+    # The recording (session attached) solved offline through the same pipeline gives the
+    # live poses back.
+    poses, _ = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
     common = [p for p in poses if p.capture_time_ns in live_by_time]
     assert len(common) >= 0.98 * len(run.poses)
@@ -86,3 +88,26 @@ def test_edge_command_line_explains_itself():
     out = subprocess.run([sys.executable, "-m", "mocap_edge", "--help"], capture_output=True, text=True)
     assert out.returncode == 0 and "--start-ns" in out.stdout
 
+
+
+def test_the_demo_command_writes_a_bvh_a_csv_and_a_report(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "mocap.cli", "demo", "--seconds", "3", "--out", str(tmp_path),
+                          "--record", str(tmp_path / "take.mcap")], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    report = (tmp_path / "report.md").read_text()
+    assert "| frames dropped | 0 |" in report, report
+    motion = bvh.load(tmp_path / "demo.bvh")
+    assert motion.num_frames == 180  # 3 s at 60 fps
+    rows = (tmp_path / "demo_joints.csv").read_text().splitlines()
+    assert len(rows) == 181 and rows[0].startswith("frame,time_s,")
+    solved = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", "--recording", str(tmp_path / "take.mcap"),
+                             "--out", str(tmp_path / "offline.bvh")], capture_output=True, text=True, timeout=120)
+    assert solved.returncode == 0, solved.stderr[-2000:]
+    assert bvh.load(tmp_path / "offline.bvh").num_frames == 180
+
+
+def test_a_recording_without_a_session_says_so(tmp_path):
+    with recording.Recorder(tmp_path / "bare.mcap") as r:
+        r.write(wire.encode(wire.KeypointFrame(camera_id="cam0")), 1)
+    with pytest.raises(InputError, match="no session is attached"):
+        offline.solve_recording(tmp_path / "bare.mcap")

@@ -58,7 +58,7 @@ def _record(args: argparse.Namespace) -> int:
 
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())  # Ctrl-C ends the recording cleanly
-    counts = recording.record(args.connect, args.out, args.seconds, stop)
+    counts = recording.record(args.connect, args.out, args.seconds, stop, session=args.session)
     print(json.dumps({"out": args.out, "recorded": counts.recorded, "dropped": counts.dropped}), flush=True)
     return 0
 
@@ -85,14 +85,20 @@ def _solve(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from mocap import _core, offline
+    import tempfile
+
+    from mocap import _core, offline, recording
     from mocap.export.bvh import write_bvh
     from mocap.export.joints_csv import write_joints_csv
 
-    poses, dropped = offline.solve_recording(Path(args.recording), Path(args.session))
+    with tempfile.TemporaryDirectory() as folder:
+        session = Path(args.session) if args.session else recording.read_session(args.recording, folder)
+        if session is None:
+            raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
+        poses, dropped = offline.solve_recording(Path(args.recording), session)
+        skeleton = _core.Skeleton.load(str(session.parent / json.loads(session.read_text())["skeleton"]))
     if not poses:
         raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped})")
-    skeleton = _core.Skeleton.load(args.skeleton or str(Path(args.session).parent / "skeleton.json"))
     thetas = np.array([list(p.theta) for p in poses])
     write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))
     if args.csv:
@@ -219,16 +225,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline; write a BVH")
     so.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
-    so.add_argument("--session", required=True, help="the session file the take was captured with")
+    so.add_argument("--session", default=None, help="session file (default: the one attached to the recording)")
     so.add_argument("--out", required=True, help="BVH to write")
     so.add_argument("--csv", default=None, help="also write joint positions as CSV")
-    so.add_argument("--skeleton", default=None, help="skeleton file (default: skeleton.json beside the session)")
     so.set_defaults(func=_solve)
 
     rec = sub.add_parser("record", help="record the streams of ZeroMQ publishers to an MCAP file (Foxglove)")
     rec.add_argument("--connect", nargs="+", required=True, metavar="EP", help="publisher endpoints, tcp://host:port")
     rec.add_argument("--out", required=True, help="MCAP file to write")
     rec.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at Ctrl-C)")
+    rec.add_argument("--session", default=None, help="attach this session file and the files it names "
+                     "(then `mocap solve --recording` needs nothing else)")
     rec.set_defaults(func=_record)
 
     rep = sub.add_parser("replay", help="publish a recording's messages on ZeroMQ, following their log times")

@@ -129,7 +129,7 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
     recorder, stop = None, threading.Event()
     if record:
         recorder = threading.Thread(target=recording.record, args=(list(studio.endpoints.values()), record),
-                                    kwargs={"stop": stop}, daemon=True)
+                                    kwargs={"stop": stop, "session": studio.session}, daemon=True)
         recorder.start()
     context = zmq.Context.instance()
     sub = transport.subscriber(context, [studio.endpoints["host"]])

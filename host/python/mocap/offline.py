@@ -4,18 +4,27 @@ recorded arrival times — the result is what the live host would have published
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from mocap import _core, recording, wire
+from mocap.errors import InputError
 
 FLUSH_NS = 1_000_000_000  # after the last input: frames still waiting are handed over
 
 
-def solve_recording(path: Path, session: Path) -> tuple[list, dict]:
+def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict]:
     """PoseFrames of the recording's inputs (/camera/*, /imu/*) solved with the session's
-    skeleton, rig, layout and IMU set; and the inputs dropped, by reason."""
+    skeleton, rig, layout and IMU set (by default the session attached to the recording);
+    and the inputs dropped, by reason."""
+    if session is None:
+        with tempfile.TemporaryDirectory() as folder:
+            attached = recording.read_session(path, folder)
+            if attached is None:
+                raise InputError(f"{path}: no session is attached to this recording; give its session file")
+            return solve_recording(path, attached)
     pipeline = _core.HostPipeline.load(str(session))
     poses, now = [], 0
     for m in recording.read(path):

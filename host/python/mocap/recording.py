@@ -19,6 +19,7 @@ recording is thus self-describing (Foxglove opens it as is; `read` needs no gene
 from __future__ import annotations
 
 import fnmatch
+import json
 import logging
 import threading
 import time
@@ -90,6 +91,9 @@ def file_descriptor_set(message_descriptor) -> bytes:
     return files.SerializeToString()
 
 
+SESSION_FILES = ("skeleton", "rig", "layout", "imus", "prior")
+
+
 class Recorder:
     """Writes well-formed mocap.v1 messages to an MCAP file; counts and skips the others."""
 
@@ -120,6 +124,22 @@ class Recorder:
             self._on_record(topic)
         return True
 
+    def attach_session(self, session: str | Path) -> None:
+        """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
+        prior), so that the recording can be solved without them (read_session)."""
+        session = Path(session)
+        config = json.loads(session.read_text())
+        for key in SESSION_FILES:
+            if config.get(key):
+                source = session.parent / config[key]
+                config[key] = f"{key}.json"
+                self._attach(f"session/{key}.json", source.read_bytes())
+        self._attach("session/session.json", json.dumps(config, indent=1).encode())
+
+    def _attach(self, name: str, data: bytes) -> None:
+        now = time.time_ns()
+        self._writer.add_attachment(create_time=now, log_time=now, name=name, media_type="application/json", data=data)
+
     def counts(self) -> Counts:
         return Counts(dict(self.recorded), dict(self.dropped))
 
@@ -144,11 +164,15 @@ class Recorder:
 
 
 def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
-           stop: threading.Event | None = None, on_record: Callable[[str], None] | None = None) -> Counts:
-    """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is set."""
+           stop: threading.Event | None = None, on_record: Callable[[str], None] | None = None,
+           session: str | Path | None = None) -> Counts:
+    """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is
+    set; with the session's files attached when given."""
     deadline = None if seconds is None else time.monotonic() + seconds
     stop = stop or threading.Event()
     with Recorder(path, on_record) as recorder, zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
+        if session is not None:
+            recorder.attach_session(session)
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             if socket.poll(POLL_MS):
                 recorder.write(socket.recv_multipart(), time.time_ns())
@@ -159,6 +183,23 @@ def read(path: str | Path) -> Iterator[RecordedMessage]:
     """The messages of a recording in log-time order."""
     with open(path, "rb") as stream:
         yield from _messages(stream, str(path))
+
+
+def read_session(path: str | Path, folder: str | Path) -> Path | None:
+    """Extracts the session attached to a recording into `folder`; its session file, or
+    None when the recording has none."""
+    found = None
+    with open(path, "rb") as stream:
+        try:
+            attachments = list(make_reader(stream).iter_attachments())
+        except McapError as e:
+            raise InputError(f"{path}: not an MCAP file ({e})") from None
+    for a in attachments:
+        if a.name.startswith("session/"):
+            target = Path(folder) / Path(a.name).name
+            target.write_bytes(a.data)
+            found = target if target.name == "session.json" else found
+    return found
 
 
 def _messages(stream: BinaryIO, name: str) -> Iterator[RecordedMessage]:
