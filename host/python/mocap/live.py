@@ -155,7 +155,10 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
                     healths.append(msg)
                     if progress:
                         progress(msg)
-        summary = json.loads(host.stdout.read().strip().splitlines()[-1] or "{}")
+        lines = host.stdout.read().strip().splitlines()
+        if host.wait() != 0 or not lines:
+            raise InputError(f"mocapd stopped with status {host.returncode} (its log is above)")
+        summary = json.loads(lines[-1])
     finally:
         for p in [*edge, host]:
             if p.poll() is None:
