@@ -108,6 +108,15 @@ def _solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _detect(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap_edge.detect.video import detect_video
+
+    print(json.dumps(detect_video(Path(args.video), Path(args.out), max_people=args.max_people)), flush=True)
+    return 0
+
+
 def _train_prior(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -222,6 +231,13 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--record", default=None, metavar="FILE", help="record every stream to this MCAP file")
     d.add_argument("--seed", type=int, default=0)
     d.set_defaults(func=_demo)
+
+    de = sub.add_parser("detect", help="the edge keypoint detector (BlazePose, region tracking) on a video: "
+                        "one OpenPose-style JSON per frame")
+    de.add_argument("video", help="video file")
+    de.add_argument("--out", required=True, help="folder of the JSON files")
+    de.add_argument("--max-people", type=int, default=2, help="people tracked at once (default 2)")
+    de.set_defaults(func=_detect)
 
     so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline; write a BVH")
     so.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
