@@ -113,3 +113,22 @@ if __name__ == "__main__":
     from mocap.demo_data import fetch_trial
 
     print(json.dumps(report(fetch_trial()), indent=1))
+    print(json.dumps(bench(fetch_trial())))
+
+
+def bench(trial: Path) -> dict:
+    """Throughput per camera with and without tracking/packing, 1 and 4 cameras per
+    process (one tracker step takes one frame of each), and in the HS mode (detections on 2
+    of every 8 frames, 4 cameras)."""
+    model = BlazePose()
+    videos = load_trial(trial)
+    per_process = {}
+    for cams in (1, 4):
+        _, naive = run(model, videos, pack=False, cameras_per_step=cams)
+        _, packed = run(model, videos, pack=True, cameras_per_step=cams)
+        per_process[cams] = {"fps_naive": naive["fps_per_camera"], "fps_packed": packed["fps_per_camera"],
+                             "speedup": packed["fps_per_camera"] / naive["fps_per_camera"]}
+    _, hs = run(model, videos, detect_every=(8, 2), cameras_per_step=4)
+    return {"bench": "edge", **per_process[1], "cameras_per_process": per_process,
+            "hs_fps_per_camera": hs["fps_per_camera"], "hs_inferred_fps_per_camera": hs["inferred_fps_per_camera"],
+            "model": "BlazePose full (MediaPipe 0.10.14) on onnxruntime, 2 threads"}

