@@ -18,6 +18,14 @@ def _bench(args: argparse.Namespace) -> int:
         from mocap import live
 
         print(json.dumps(live.bench(seconds=args.live_seconds)), flush=True)
+    if "edge" in args.only:
+        from mocap.demo_data import fetch_trial
+        from mocap_edge.detect import evaluation
+
+        try:
+            print(json.dumps(evaluation.bench(fetch_trial())), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "edge", "skipped": str(e)}), flush=True)
     bench.pin_to_one_core()
     if "solver" in args.only:
         try:
@@ -117,6 +125,14 @@ def _detect(args: argparse.Namespace) -> int:
     return 0
 
 
+def _eval_edge(args: argparse.Namespace) -> int:
+    from mocap import real_trial
+    from mocap.demo_data import fetch_trial
+
+    print(json.dumps(real_trial.evaluate(fetch_trial()), indent=1), flush=True)
+    return 0
+
+
 def _train_prior(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -172,8 +188,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
 
     b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
-    b.add_argument("--only", nargs="+", default=["solver", "live"], choices=["solver", "live"],
-                   help="benchmarks to run (default both)")
+    b.add_argument("--only", nargs="+", default=["solver", "live", "edge"], choices=["solver", "live", "edge"],
+                   help="benchmarks to run (default all)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -238,6 +254,10 @@ def build_parser() -> argparse.ArgumentParser:
     de.add_argument("--out", required=True, help="folder of the JSON files")
     de.add_argument("--max-people", type=int, default=2, help="people tracked at once (default 2)")
     de.set_defaults(func=_detect)
+
+    ee = sub.add_parser("eval-edge", help="the edge detector on the real Balancing trial (PCK against OpenPose, "
+                        "speed) and the video-only solve of its keypoints against Pose2Sim's TRC")
+    ee.set_defaults(func=_eval_edge)
 
     so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline; write a BVH")
     so.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")

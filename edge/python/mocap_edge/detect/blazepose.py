@@ -79,7 +79,7 @@ class BlazePose:
             kp = decoders.decode_regression(r, 39)
             xy = region.to_image(kp[:, :2], LANDMARK_SIZE)
             people.append(Person(np.column_stack([xy[:KEYPOINTS], kp[:KEYPOINTS, 2]]),
-                                 float(decoders.sigmoid(np.asarray(flag).reshape(-1)[:1])[0]),
+                                 float(np.asarray(flag).reshape(-1)[0]),  # a probability already
                                  roi.aligned(xy[33], xy[34])))
         return people
 

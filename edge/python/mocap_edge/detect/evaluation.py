@@ -109,12 +109,6 @@ def report(trial: Path) -> dict:
     return {"bench": "edge-accuracy", "tracked": pck(trial, tracked) | speed, "naive": pck(trial, naive) | naive_speed}
 
 
-if __name__ == "__main__":
-    from mocap.demo_data import fetch_trial
-
-    print(json.dumps(report(fetch_trial()), indent=1))
-    print(json.dumps(bench(fetch_trial())))
-
 
 def bench(trial: Path) -> dict:
     """Throughput per camera with and without tracking/packing, 1 and 4 cameras per
@@ -132,3 +126,10 @@ def bench(trial: Path) -> dict:
     return {"bench": "edge", **per_process[1], "cameras_per_process": per_process,
             "hs_fps_per_camera": hs["fps_per_camera"], "hs_inferred_fps_per_camera": hs["inferred_fps_per_camera"],
             "model": "BlazePose full (MediaPipe 0.10.14) on onnxruntime, 2 threads"}
+
+
+if __name__ == "__main__":
+    from mocap.demo_data import fetch_trial
+
+    print(json.dumps(report(fetch_trial()), indent=1))
+    print(json.dumps(bench(fetch_trial())))

@@ -1,0 +1,108 @@
+"""Video-only solve of the real Balancing trial (mocap.demo_data.fetch_trial): the edge
+detector's BlazePose keypoints of the four real cameras, the shipped Qualisys calibration,
+the host solver (E_P and the prior; no IMUs in this trial), compared with Pose2Sim's own
+triangulated result (its TRC).
+
+Skeleton: fitted to Pose2Sim's TRC (mocap.demo_motion.body_model) — the subject's own
+proportions, taken from the reference (estimating it from video is the calibration issue).
+The TRC is Y-up; its axes in the calibration's world frame are the axis permutation whose
+projection best matches the shipped OpenPose detections (found, not assumed). Compared: the
+21 TRC markers against the same points (sites of the fitted body) on our solved skeleton.
+Jitter: mean |second difference| of those points x rate^2 (m/s^2), ours and the TRC's.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, calib_toml, demo_motion, paths, studio
+from mocap.demo_data import TRIAL
+from mocap.solver import Solver
+
+RATE = 60.0
+# TRC marker -> OpenPose BODY_25B index, to find the TRC's axes.
+BODY25B = {"Nose": 0, "LShoulder": 5, "RShoulder": 6, "LElbow": 7, "RElbow": 8, "LWrist": 9, "RWrist": 10,
+           "LHip": 11, "RHip": 12, "LKnee": 13, "RKnee": 14, "LAnkle": 15, "RAnkle": 16}
+
+
+def _rotations() -> list[np.ndarray]:
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product([1, -1], repeat=3):
+            r = np.zeros((3, 3))
+            r[range(3), perm] = signs
+            if np.isclose(np.linalg.det(r), 1):
+                out.append(r)
+    return out
+
+
+def trc_axes(rig: _core.Rig, trc: demo_motion.Trc, openpose: list[list[np.ndarray]]) -> np.ndarray:
+    """The proper axis permutation R (calibration world = R @ TRC) whose projections of the
+    TRC markers lie nearest OpenPose's keypoints (median pixel distance)."""
+    idx = [trc.names.index(n) for n in BODY25B]
+    best, best_err = None, np.inf
+    for r in _rotations():
+        errs = []
+        for c, cam in enumerate(rig.cameras):
+            for f in range(0, len(trc.markers), 10):
+                px, ok = cam.project(trc.markers[f, idx] @ r.T)
+                op = openpose[c][f][list(BODY25B.values())]
+                use = ok & (op[:, 2] > 0)
+                errs += list(np.linalg.norm(px[use] - op[use, :2], axis=1))
+        err = np.median(errs) if errs else np.inf
+        if err < best_err:
+            best, best_err = r, err
+    return best
+
+
+def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) -> dict:
+    """keypoints (C, F, 33, 3) BlazePose pixels + confidence (0 where not detected)."""
+    rig = calib_toml.load(trial / "Calib_qualisys.toml")
+    trc = demo_motion.read_trc(trial / TRIAL)
+    body = demo_motion.body_model(trc.names, demo_motion.world_markers(trc))
+    skeleton = body.skeleton
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "blazepose33.json"), skeleton).scaled_to(skeleton)
+    r = trc_axes(rig, trc, openpose)
+    reference = trc.markers @ r.T  # (F, M, 3) calibration world
+    solver = Solver(skeleton, rig, layout, [])
+    cams = list(range(len(rig.cameras)))
+    solved = []
+    for f in range(keypoints.shape[1]):
+        result = solver.solve(f / RATE, cams, keypoints[:, f], [], np.zeros((0, 4)), np.zeros((0, 3)))
+        solved.append(studio.site_positions(skeleton, body.bones, body.offsets, result.theta))
+    solved = np.array(solved)
+    n = min(len(solved), len(reference))
+    d = np.linalg.norm(solved[:n] - reference[:n], axis=-1)  # (F, M)
+    return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)), "distance_median_cm": 100 * float(np.nanmedian(d)),
+            "per_marker_cm": {m: 100 * float(np.nanmean(d[:, i])) for i, m in enumerate(trc.names)},
+            "jitter_ours_ms2": _jitter(solved[:n]), "jitter_pose2sim_ms2": _jitter(reference[:n]),
+            "trc_axes": r.astype(int).tolist()}
+
+
+def _jitter(x: np.ndarray) -> float:
+    return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * RATE**2)
+
+
+def evaluate(trial: Path) -> dict:
+    """`mocap eval-edge`: the edge detector's PCK and speed (mocap_edge.detect.evaluation)
+    and the video-only solve of its keypoints against Pose2Sim's TRC."""
+    from mocap_edge.detect import evaluation
+    from mocap_edge.detect.openpose_json import read_frame
+
+    videos = evaluation.load_trial(trial)
+    model = evaluation.BlazePose()
+    found, speed = evaluation.run(model, videos)
+    naive, naive_speed = evaluation.run(model, videos, pack=False)
+    keypoints = np.zeros((len(found), len(videos[evaluation.CAMERAS[0]]), 33, 3))
+    for i, c in enumerate(evaluation.CAMERAS):
+        for f, person in enumerate(found[c]):
+            if person is not None:
+                keypoints[i, f] = person.keypoints
+    openpose = [[max(read_frame(p), key=evaluation.box_size) for p in sorted((trial / "pose" / f"cam{c}_json").glob("*.json"))]
+                for c in evaluation.CAMERAS]
+    return {"detector_tracked": evaluation.pck(trial, found) | speed,
+            "detector_naive": evaluation.pck(trial, naive) | naive_speed,
+            "video_only_solve": solve(trial, keypoints, openpose)}
