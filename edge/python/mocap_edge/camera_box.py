@@ -17,7 +17,6 @@ import zmq
 from mocap import transport, wire
 from mocap_edge import pacing
 from mocap_edge.detect.blazepose import BlazePose, Person
-from mocap_edge.detect.openpose_json import LAYOUT
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import Frame
 from mocap_edge.trigger import TriggerPairing
@@ -30,11 +29,12 @@ class BoxCounts:
     people: int = 0
 
 
-def keypoint_frame(camera: str, frame: Frame, people: list[Person] | None, send_time_ns: int = 0) -> wire.KeypointFrame:
+def keypoint_frame(camera: str, frame: Frame, people: list[Person] | None, layout: str,
+                   send_time_ns: int = 0) -> wire.KeypointFrame:
     """The wire message of a frame; people None: no detection was run on it."""
     h, w = frame.image.shape[:2]
     msg = wire.KeypointFrame(camera_id=camera, frame_index=frame.index, capture_time_ns=frame.capture_time_ns,
-                             image_width=w, image_height=h, keypoint_layout=LAYOUT, detected=people is not None,
+                             image_width=w, image_height=h, keypoint_layout=layout, detected=people is not None,
                              send_time_ns=send_time_ns)
     for p in people or []:
         msg.persons.add(x=p.keypoints[:, 0].tolist(), y=p.keypoints[:, 1].tolist(),
@@ -51,10 +51,11 @@ def detections(frames: Iterable[Frame], tracker: Tracker, camera: str,
 
 
 def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple[int, int] = (1, 1),
-        pairing: TriggerPairing | None = None, realtime: bool = False, model: BlazePose | None = None,
+        pairing: TriggerPairing | None = None, realtime: bool = False, model=None,
         max_people: int = 2) -> BoxCounts:
     """Publishes every frame of `frames` (paired with trigger edges when given). realtime:
-    a file source is played at its capture times instead of as fast as detection runs."""
+    a file source is played at its capture times instead of as fast as detection runs.
+    model: BlazePose (default) or a TopDownModel."""
     tracker = Tracker(model or BlazePose(), max_people=max_people)
     socket = transport.publisher(zmq.Context.instance(), endpoint)
     counts = BoxCounts()
@@ -63,7 +64,7 @@ def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple
         for frame, people in detections(source, tracker, camera, detect_every):
             if realtime:
                 pacing.sleep_until(frame.capture_time_ns)
-            msg = keypoint_frame(camera, frame, people, send_time_ns=time.time_ns())
+            msg = keypoint_frame(camera, frame, people, tracker.model.layout.name, send_time_ns=time.time_ns())
             socket.send_multipart(wire.encode(msg))
             counts.frames += 1
             counts.detected += people is not None

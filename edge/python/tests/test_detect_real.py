@@ -3,6 +3,7 @@ the setup step into .cache/), scored against the OpenPose detections shipped wit
 
 import dataclasses
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -12,7 +13,8 @@ import pytest
 from mocap import real_trial
 from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
 from mocap_edge.detect import evaluation, tracking
-from mocap_edge.detect.blazepose import MIRROR, BlazePose, Person
+from mocap_edge.detect.blazepose import BlazePose, Person
+from mocap_edge.detect.layouts import load as load_layout
 from mocap_edge.detect.openpose_json import read_frame
 from mocap_edge.detect.roi import Roi
 
@@ -72,11 +74,11 @@ def test_a_swapped_arm_is_mirrored_back_and_a_real_move_is_kept():
     before = np.column_stack([rng.uniform(0, 500, (33, 2)), np.ones(33)])
     swapped = before.copy()
     arms = np.arange(11, 23)
-    swapped[arms] = before[MIRROR][arms]
+    swapped[arms] = before[load_layout("blazepose33").mirror][arms]
     person = Person(swapped, 1.0, Roi(np.zeros(2), 100.0))
-    np.testing.assert_allclose(tracking._consistent(person, before).keypoints, before)
+    np.testing.assert_allclose(tracking._consistent(person, before, load_layout("blazepose33")).keypoints, before)
     moved = dataclasses.replace(person, keypoints=before + [3.0, -2.0, 0.0])
-    np.testing.assert_allclose(tracking._consistent(moved, before).keypoints, moved.keypoints)
+    np.testing.assert_allclose(tracking._consistent(moved, before, load_layout("blazepose33")).keypoints, moved.keypoints)
 
 
 def test_an_empty_scene_loses_tracking_and_runs_the_person_detector_again(model):
@@ -88,3 +90,25 @@ def test_an_empty_scene_loses_tracking_and_runs_the_person_detector_again(model)
     # A crop forced onto the blank image is judged empty by the landmark model's pose flag.
     person = model.landmarks([(blank, Roi(np.array([320.0, 240.0]), 300.0))])[0]
     assert person.presence < 0.5
+
+
+@needs_trial
+def test_a_model_dropped_in_by_configuration_runs_through_the_generic_top_down_path(tmp_path, model):
+    from mocap_edge.detect import topdown
+
+    # BlazePose's landmark network described as any regression model; it was trained on
+    # crops wider than the keypoints' box x 1.25 (padding 1.25: PCK@0.10 83%, 1.7: 94%).
+    config = tmp_path / "model.json"
+    network = Path(__file__).resolve().parents[2] / "models" / "blazepose" / "pose_landmark_full.onnx"
+    config.write_text(json.dumps({
+        "format": "mocap.edge-model/1", "onnx": str(network), "layout": "blazepose33", "input": [256, 256],
+        "channels_first": False, "mean": [0, 0, 0], "std": [255, 255, 255], "decoder": "regression",
+        "values_per_keypoint": 5, "padding": 1.7}))
+    generic = topdown.load_model(str(config))
+    assert isinstance(generic, topdown.TopDownModel) and len(generic.layout) == 33
+    videos = evaluation.load_trial(TRIAL_CACHE, cameras=(1,), frames=30)
+    found, speed = evaluation.run(generic, videos)
+    score = evaluation.pck(TRIAL_CACHE, found)
+    assert score["pck10"] > 0.9, score  # tracked by its own keypoint boxes, not BlazePose's auxiliary points
+    with pytest.raises(topdown.EdgeError, match="not a model configuration"):
+        topdown.load_model(str(tmp_path / "missing.json"))

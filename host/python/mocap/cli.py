@@ -121,7 +121,8 @@ def _detect(args: argparse.Namespace) -> int:
 
     from mocap_edge.detect.video import detect_video
 
-    print(json.dumps(detect_video(Path(args.video), Path(args.out), max_people=args.max_people)), flush=True)
+    print(json.dumps(detect_video(Path(args.video), Path(args.out), max_people=args.max_people, model=args.model)),
+          flush=True)
     return 0
 
 
@@ -253,6 +254,8 @@ def build_parser() -> argparse.ArgumentParser:
     de.add_argument("video", help="video file")
     de.add_argument("--out", required=True, help="folder of the JSON files")
     de.add_argument("--max-people", type=int, default=2, help="people tracked at once (default 2)")
+    de.add_argument("--model", default="blazepose", help="blazepose (default) or a model configuration JSON "
+                    "(edge/python/mocap_edge/detect/topdown.py)")
     de.set_defaults(func=_detect)
 
     ee = sub.add_parser("eval-edge", help="the edge detector on the real Balancing trial (PCK against OpenPose, "

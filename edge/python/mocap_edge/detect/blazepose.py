@@ -17,14 +17,12 @@ from pathlib import Path
 import numpy as np
 import onnxruntime as ort
 
-from mocap_edge.detect import anchors, decoders, roi
+from mocap_edge.detect import anchors, decoders, layouts, roi
 
 MODELS = Path(__file__).resolve().parents[3] / "models" / "blazepose"
 DETECTOR_SIZE, LANDMARK_SIZE = 224, 256
 KEYPOINTS = 33  # plus 2 auxiliary (tracking) landmarks in the model's 39 x 5 output
-# Each keypoint's left/right twin (host/data/layouts/blazepose33.json order).
-MIRROR = np.array([0, 4, 5, 6, 1, 2, 3, 8, 7, 10, 9, 12, 11, 14, 13, 16, 15, 18, 17, 20, 19, 22, 21, 24, 23, 26, 25,
-                   28, 27, 30, 29, 32, 31])
+
 
 
 @dataclasses.dataclass
@@ -46,6 +44,7 @@ class BlazePose:
         self.detector = _session(models / "pose_detection.onnx", threads)
         self.landmarker = _session(models / "pose_landmark_full.onnx", threads)
         self.anchors = anchors.ssd_anchors()
+        self.layout = layouts.load("blazepose33")
         self.min_detection = min_detection
         batch = self.landmarker.get_inputs()[0].shape[0]
         self.batchable = not isinstance(batch, int) or batch != 1  # a symbolic batch dimension

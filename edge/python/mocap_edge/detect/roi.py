@@ -24,23 +24,32 @@ class Roi:
         c, s = np.cos(self.rotation), np.sin(self.rotation)
         return np.array([[c, -s], [s, c]])  # columns u, v
 
-    def to_image(self, points: np.ndarray, crop_size: int) -> np.ndarray:
+    def extent(self, crop_size: int | tuple[int, int]) -> tuple[tuple[int, int], np.ndarray]:
+        """The crop's (width, height) in pixels and the region's sides (along u, along v) in
+        image pixels: `size` is the side along v; a non-square crop widens or narrows u."""
+        w, h = (crop_size, crop_size) if isinstance(crop_size, int) else crop_size
+        return (w, h), np.array([self.size * w / h, self.size])
+
+    def to_image(self, points: np.ndarray, crop_size: int | tuple[int, int]) -> np.ndarray:
         """(N, 2) crop pixels -> image pixels."""
-        local = (np.asarray(points, np.float64) / crop_size - 0.5) * self.size
+        wh, sides = self.extent(crop_size)
+        local = (np.asarray(points, np.float64) / wh - 0.5) * sides
         return self.centre + local @ self.axes().T
 
-    def to_crop(self, points: np.ndarray, crop_size: int) -> np.ndarray:
+    def to_crop(self, points: np.ndarray, crop_size: int | tuple[int, int]) -> np.ndarray:
         """(N, 2) image pixels -> crop pixels."""
+        wh, sides = self.extent(crop_size)
         local = (np.asarray(points, np.float64) - self.centre) @ self.axes()
-        return (local / self.size + 0.5) * crop_size
+        return (local / sides + 0.5) * wh
 
-    def crop(self, image: np.ndarray, crop_size: int) -> np.ndarray:
-        """The region resampled to crop_size x crop_size (bilinear, zero outside the image)."""
-        a = self.axes() * (self.size / crop_size)
+    def crop(self, image: np.ndarray, crop_size: int | tuple[int, int]) -> np.ndarray:
+        """The region resampled to the crop size (bilinear, zero outside the image)."""
+        wh, sides = self.extent(crop_size)
+        a = self.axes() * (sides / wh)  # column j scaled by image pixels per crop pixel along it
         # crop index (i, j) -> image index: continuous coords are index + 0.5 on both sides.
         b = self.to_image(np.array([[0.5, 0.5]]), crop_size)[0] - 0.5
         m = np.hstack([a, b[:, None]])
-        return cv2.warpAffine(image, m, (crop_size, crop_size), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        return cv2.warpAffine(image, m, wh, flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                               borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
 

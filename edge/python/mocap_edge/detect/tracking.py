@@ -15,9 +15,9 @@ import dataclasses
 
 import numpy as np
 
-from mocap_edge.detect.blazepose import MIRROR, BlazePose, Person
+from mocap_edge.detect.blazepose import Person
+from mocap_edge.detect.layouts import Layout
 
-GROUPS = [np.arange(1, 11), np.arange(11, 23), np.arange(23, 33)]  # face, arms, legs
 FLIP_MARGIN = 0.5  # mirrored must be nearer than this fraction of the as-is distance
 
 
@@ -30,9 +30,9 @@ class Counts:
 
 
 class Tracker:
-    def __init__(self, model: BlazePose, max_people: int = 2, min_presence: float = 0.5,
+    def __init__(self, model, max_people: int = 2, min_presence: float = 0.5,
                  redetect_every: int = 0, pack: bool = True):
-        """redetect_every 0: only when tracking is lost. pack False: one inference per crop
+        """model: BlazePose or TopDownModel (detect, landmarks, layout). redetect_every 0: only when tracking is lost. pack False: one inference per crop
         and the detector on every frame (the naive baseline of the benchmark)."""
         self.model, self.max_people, self.min_presence = model, max_people, min_presence
         self.redetect_every, self.pack = redetect_every, pack
@@ -64,19 +64,19 @@ class Tracker:
         self.tracks = {c: [] for c in images}
         for camera, person, before in zip(owners, people, previous):
             if person.presence >= self.min_presence:
-                out[camera].append(_consistent(person, before))
+                out[camera].append(_consistent(person, before, self.model.layout))
         for camera in out:
             out[camera] = _distinct(out[camera])
             self.tracks[camera] = [(p.next_roi, p.keypoints) for p in out[camera]]
         return out
 
 
-def _consistent(person: Person, before: np.ndarray | None) -> Person:
+def _consistent(person: Person, before: np.ndarray | None, layout: Layout) -> Person:
     """The person with each left/right group mirrored back where it swapped since `before`."""
     if before is None:
         return person
-    k, mirrored = person.keypoints.copy(), person.keypoints[MIRROR]
-    for g in GROUPS:
+    k, mirrored = person.keypoints.copy(), person.keypoints[layout.mirror]
+    for g in layout.groups:
         as_is = np.linalg.norm(k[g, :2] - before[g, :2], axis=1).sum()
         if np.linalg.norm(mirrored[g, :2] - before[g, :2], axis=1).sum() < FLIP_MARGIN * as_is:
             k[g] = mirrored[g]

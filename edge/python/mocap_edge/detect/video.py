@@ -6,21 +6,23 @@ from __future__ import annotations
 from pathlib import Path
 
 from mocap_edge.detect import openpose_json
-from mocap_edge.detect.blazepose import BlazePose
+from mocap_edge.detect.topdown import load_model
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import open_source
 
 
-def detect_video(video: Path, out: Path, max_people: int = 2, threads: int = 2) -> dict:
-    """Writes out/<stem>_<frame>_keypoints.json for every frame; returns counts."""
+def detect_video(video: Path, out: Path, max_people: int = 2, model: str = "blazepose") -> dict:
+    """Writes out/<stem>_<frame>_keypoints.json for every frame; returns counts. model:
+    "blazepose" or a model configuration file (topdown.py)."""
     out.mkdir(parents=True, exist_ok=True)
-    tracker = Tracker(BlazePose(threads=threads), max_people=max_people)
+    tracker = Tracker(load_model(model), max_people=max_people)
     frames = people = 0
     with open_source(f"video:{video}") as source:
         for frame in source:
             found = tracker.step({"cam": frame.image})["cam"]
             openpose_json.write_frame(openpose_json.frame_file(out, Path(video).stem, frame.index),
-                                      [p.keypoints for p in found], frame.index, frame.capture_time_ns)
+                                      [p.keypoints for p in found], frame.index, frame.capture_time_ns,
+                                      tracker.model.layout)
             frames += 1
             people += len(found)
     return {"video": str(video), "frames": frames, "people": people, "detector_runs": tracker.counts.detector_runs,
