@@ -22,6 +22,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="detect on BURST consecutive frames of every PERIOD (high-speed mode)")
     p.add_argument("--realtime", action="store_true", help="play a file source at its capture times")
     p.add_argument("--model", default="blazepose", help="keypoint model: blazepose or a configuration JSON")
+    p.add_argument("--trigger", metavar="CHIP:LINE", help="pair frames with the rising edges of this GPIO line "
+                   "(e.g. /dev/gpiochip0:17; docs/sync.md)")
     p.add_argument("--streams", help="stream file of the simulated studio (.npz, mocap_edge.streams)")
     p.add_argument("--bind", required=True, help="ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
     p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now)")
@@ -50,6 +52,7 @@ def main(argv: list[str] | None = None) -> int:
 def _camera_box(a) -> int:
     from mocap_edge import camera_box
     from mocap_edge.detect.topdown import load_model
+    from mocap_edge.trigger import GpiodTrigger, TriggerPairing
     from mocap_edge.errors import EdgeError
     from mocap_edge.sources.base import open_source
 
@@ -58,9 +61,13 @@ def _camera_box(a) -> int:
         {"fps": a.fps} if a.fps else {})
     try:
         with open_source(a.source, **options) as source:
-            counts = camera_box.run(source, a.camera or "cam0", a.bind, tuple(a.hs), realtime=a.realtime,
-                                    model=load_model(a.model))
-    except EdgeError as e:
+            pairing = None
+            if a.trigger:
+                chip, _, line = a.trigger.rpartition(":")
+                pairing = TriggerPairing(GpiodTrigger(chip, int(line)), source.nominal_fps)
+            counts = camera_box.run(source, a.camera or "cam0", a.bind, tuple(a.hs), pairing=pairing,
+                                    realtime=a.realtime, model=load_model(a.model))
+    except (EdgeError, ValueError) as e:  # ValueError: a --trigger line that is not a number
         print(f"mocap_edge: {e}", file=sys.stderr)
         return 1
     print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people",
