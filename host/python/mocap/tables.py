@@ -92,7 +92,9 @@ def markdown(r: dict, command: str) -> str:
     lines = ["# Results on the test clips", "",
              f"Regenerate everything on this page: `{command}` (seed {r['seed']}, ~6 minutes on one core).",
              "Simulated studio of `host/python/mocap/sim/` on the test clips of `host/data/motion_split.json`;",
-             "oracle calibration (true skeleton and sensor mounting); raw numbers in `docs/results.json`.", "",
+             "oracle calibration (true skeleton and sensor mounting); raw numbers in `docs/results.json`.",
+             "Real video (the edge detector and a video-only solve of Pose2Sim's Balancing trial):",
+             "`docs/results_real.md`.", "",
              "## Input configurations (paper: \"Number of IMUs and quality/speed trade-off\")", "",
              "Position error (cm)", "", head]
     for name, s in [("13 IMU, HQ", conf["hq13"]), ("13 IMU, HS", conf["hs13"]), ("6 IMU, HQ", conf["hq6"]),
