@@ -22,9 +22,10 @@ METRE_TOL = 1e-4  # world landmarks (4.8e-6 / 3.0e-5 m)
 
 IO = {
     "pose_detection": ({"input_1": [1, 224, 224, 3]}, {"Identity": [1, 2254, 12], "Identity_1": [1, 2254, 1]}),
-    "pose_landmark_full": ({"input_1": [1, 256, 256, 3]},
-                           {"Identity": [1, 195], "Identity_1": [1, 1], "Identity_2": [1, 256, 256, 1],
-                            "Identity_3": [1, 64, 64, 39], "Identity_4": [1, 117]}),
+    # The edge variant: no segmentation output, a symbolic batch (convert_blazepose.edge_variant).
+    "pose_landmark_full": ({"input_1": ["batch", 256, 256, 3]},
+                           {"Identity": ["batch", 195], "Identity_1": ["batch", 1],
+                            "Identity_3": ["batch", 64, 64, 39], "Identity_4": ["batch", 117]}),
 }
 
 

@@ -22,6 +22,7 @@ from mocap_edge.detect import anchors, decoders, layouts, roi
 MODELS = Path(__file__).resolve().parents[3] / "models" / "blazepose"
 DETECTOR_SIZE, LANDMARK_SIZE = 224, 256
 KEYPOINTS = 33  # plus 2 auxiliary (tracking) landmarks in the model's 39 x 5 output
+OUTPUTS = ["Identity", "Identity_1", "Identity_3"]  # landmarks, pose flag, heatmap (64 x 64 x 39)
 
 
 
@@ -46,6 +47,7 @@ class BlazePose:
         self.anchors = anchors.ssd_anchors()
         self.layout = layouts.load("blazepose33")
         self.min_detection = min_detection
+        self._landmark_input = self.landmarker.get_inputs()[0].name
         batch = self.landmarker.get_inputs()[0].shape[0]
         self.batchable = not isinstance(batch, int) or batch != 1  # a symbolic batch dimension
 
@@ -53,7 +55,7 @@ class BlazePose:
         """Crops around the people in an RGB image (the full-image person detector)."""
         box = roi.letterbox(image.shape[1], image.shape[0])
         x = box.crop(image, DETECTOR_SIZE).astype(np.float32)[None] / 127.5 - 1.0
-        raw_boxes, raw_scores = self._outputs(self.detector, x, [(12,), (1,)])
+        raw_boxes, raw_scores = self.detector.run(["Identity", "Identity_1"], {self.detector.get_inputs()[0].name: x})
         found = decoders.weighted_nms(decoders.decode_ssd(raw_boxes[0], raw_scores[0], self.anchors, DETECTOR_SIZE,
                                                           self.min_detection))
         out = []
@@ -63,32 +65,24 @@ class BlazePose:
         return out
 
     def landmarks(self, crops: list[tuple[np.ndarray, roi.Roi]]) -> list[Person]:
-        """People from (image, region) pairs — regions of any images, inferred together in one
-        batch when the model takes one (the paper's packing), else one by one."""
+        """People from (image, region) pairs — regions of any images, packed into one
+        inference (the model's batch dimension is symbolic: edge/models/blazepose/README.md).
+        Landmarks are refined from the heatmap as MediaPipe does."""
         if not crops:
             return []
         x = np.stack([r.crop(image, LANDMARK_SIZE) for image, r in crops]).astype(np.float32) / 255.0
         if self.batchable:
-            raw, flags = self._outputs(self.landmarker, x, [(195,), (1,)])
+            runs = [self.landmarker.run(OUTPUTS, {self._landmark_input: x})]
         else:
-            parts = [self._outputs(self.landmarker, x[i:i + 1], [(195,), (1,)]) for i in range(len(x))]
-            raw, flags = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+            runs = [self.landmarker.run(OUTPUTS, {self._landmark_input: x[i:i + 1]}) for i in range(len(x))]
+        raw, flags, heatmaps = (np.concatenate([r[k] for r in runs]) for k in range(3))
         people = []
-        for (_, region), r, flag in zip(crops, raw, flags):
-            kp = decoders.decode_regression(r, 39)
+        for (_, region), r, flag, heatmap in zip(crops, raw, flags, heatmaps):
+            lm = r.reshape(39, 5).astype(np.float64)
+            lm[:KEYPOINTS, :2] = decoders.refine_from_heatmaps(lm[:KEYPOINTS, :2], heatmap, LANDMARK_SIZE / heatmap.shape[0])
+            kp = decoders.decode_regression(lm.reshape(-1), 39)
             xy = region.to_image(kp[:, :2], LANDMARK_SIZE)
             people.append(Person(np.column_stack([xy[:KEYPOINTS], kp[:KEYPOINTS, 2]]),
                                  float(np.asarray(flag).reshape(-1)[0]),  # a probability already
                                  roi.aligned(xy[33], xy[34])))
         return people
-
-    @staticmethod
-    def _outputs(session: ort.InferenceSession, x: np.ndarray, shapes: list[tuple[int, ...]]) -> list[np.ndarray]:
-        """The outputs whose trailing shape is each of `shapes`, by shape (names differ
-        between conversions)."""
-        outs = session.run(None, {session.get_inputs()[0].name: x})
-        picked = []
-        for shape in shapes:
-            match = [o for o in outs if tuple(o.shape[-len(shape):]) == shape and o.ndim == len(shape) + 1 + (len(shape) == 1 and o.ndim == 3)]
-            picked.append(match[0] if match else next(o for o in outs if o.shape[-1] == shape[-1]))
-        return picked

@@ -76,6 +76,28 @@ def decode_regression(raw: np.ndarray, keypoints: int, values: int = 5) -> np.nd
     return np.column_stack([r[:, 0], r[:, 1], conf])
 
 
+def refine_from_heatmaps(points: np.ndarray, heatmaps: np.ndarray, stride: float, kernel: int = 7,
+                         min_confidence: float = 0.5) -> np.ndarray:
+    """MediaPipe's RefineLandmarksFromHeatmap: each point (K, 2+) moved to the sigmoid-weighted
+    mean of the kernel x kernel heatmap cells around its own cell, when the window's largest
+    weight reaches min_confidence. heatmaps (H, W, >= K) logits; stride: input pixels per cell."""
+    out = np.array(points, np.float64)
+    h, w = heatmaps.shape[:2]
+    half = kernel // 2
+    for j in range(len(out)):
+        cx, cy = int(out[j, 0] // stride), int(out[j, 1] // stride)
+        x0, x1, y0, y1 = max(cx - half, 0), min(cx + half + 1, w), max(cy - half, 0), min(cy + half + 1, h)
+        if x0 >= x1 or y0 >= y1:
+            continue
+        weights = sigmoid(heatmaps[y0:y1, x0:x1, j].astype(np.float64))
+        if weights.max() < min_confidence:
+            continue
+        rows, cols = np.mgrid[y0:y1, x0:x1]
+        out[j, 0] = stride * (cols * weights).sum() / weights.sum()
+        out[j, 1] = stride * (rows * weights).sum() / weights.sum()
+    return out
+
+
 def decode_heatmaps(heatmaps: np.ndarray, input_size: tuple[int, int]) -> np.ndarray:
     """(K, 3) from (K, H, W) heatmaps; confidence = the peak value, clipped to [0, 1]."""
     k, h, w = heatmaps.shape
