@@ -28,7 +28,7 @@ OUTPUTS = ["Identity", "Identity_1", "Identity_3"]  # landmarks, pose flag, heat
 
 @dataclasses.dataclass
 class Person:
-    keypoints: np.ndarray  # (33, 3) image pixels x, y and confidence
+    keypoints: np.ndarray  # (K, 3) image pixels x, y and confidence, in the model's layout
     presence: float  # the landmark model's pose flag: a person is in the crop
     next_roi: roi.Roi  # where to look in the next frame
 

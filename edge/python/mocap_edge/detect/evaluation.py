@@ -87,8 +87,6 @@ def pck(trial: Path, detections: dict[int, list]) -> dict:
         for a in hits:
             hits[a][c] = []
         for f, person in enumerate(people):
-            if person is None and f >= len(people):
-                continue
             truth = openpose_subject(trial, c, f)
             seen, scale = truth[:, 2] > 0, box_size(truth)
             d = (np.full(17, np.inf) if person is None
