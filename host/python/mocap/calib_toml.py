@@ -8,6 +8,7 @@ Fisheye cameras are refused: the solver models OpenCV's pinhole distortion only.
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
 
@@ -51,3 +52,22 @@ def load(path: str | Path) -> _core.Rig:
     # Round-trip through the rig parser, which validates every camera.
     rig = _core.Rig(cams)
     return _core.Rig.from_json(rig.to_json())
+
+
+def _floats(values) -> str:
+    return "[" + ", ".join(repr(float(v)) for v in values) + "]"
+
+
+def dumps(rig: _core.Rig) -> str:
+    """The rig in the Pose2Sim layout (`[cam_01]`.. in rig order, `name` the camera's name;
+    distortions k1 k2 p1 p2, and k3 only when it is not zero); `load` reads it back."""
+    out = []
+    for i, cam in enumerate(rig.cameras):
+        dist = list(cam.distortion)
+        matrix = [[cam.fx, 0.0, cam.cx], [0.0, cam.fy, cam.cy], [0.0, 0.0, 1.0]]
+        out.append(f"[cam_{i + 1:02d}]\nname = {json.dumps(cam.name)}\nsize = {_floats([cam.width, cam.height])}\n"
+                   f"matrix = [{', '.join(_floats(r) for r in matrix)}]\n"
+                   f"distortions = {_floats(dist if dist[4] else dist[:4])}\n"
+                   f"rotation = {_floats(rotations.log(np.asarray(cam.rotation)))}\n"
+                   f"translation = {_floats(cam.translation)}\nfisheye = false\n")
+    return "\n".join(out) + "\n[metadata]\nadjusted = false\nerror = 0.0\n"

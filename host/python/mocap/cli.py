@@ -116,6 +116,15 @@ def _solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _simulate(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap.sim import take_out
+
+    print(json.dumps(take_out.run(Path(args.take_out), args.seconds, args.preset, args.seed)), flush=True)
+    return 0
+
+
 def _detect(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -248,6 +257,15 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--record", default=None, metavar="FILE", help="record every stream to this MCAP file")
     d.add_argument("--seed", type=int, default=0)
     d.set_defaults(func=_demo)
+
+    sm = sub.add_parser("simulate", help="simulate a take of the demo motion (cameras + IMUs) and write it as a "
+                        "take folder (docs/take_format.md), with its truth (truth.json) beside it")
+    sm.add_argument("--take-out", required=True, metavar="DIR", help="take folder to write")
+    sm.add_argument("--seconds", type=float, default=10.0, help="length of the take (default 10)")
+    sm.add_argument("--preset", default="hq13", choices=["hq13", "hs13", "hq6", "hs6"],
+                    help="cameras and IMU set, as `mocap eval` (default hq13)")
+    sm.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sm.set_defaults(func=_simulate)
 
     de = sub.add_parser("detect", help="the edge keypoint detector (BlazePose, region tracking) on a video: "
                         "one OpenPose-style JSON per frame")

@@ -1,0 +1,101 @@
+"""The simulated studio written as a take folder (`mocap simulate --take-out DIR`), with the
+truth that a take from another tool would not carry, for the calibration's tests.
+
+The demo motion (mocap.demo_motion, 60 Hz) is played through mocap.sim.take: the told
+(perturbed) rig goes to Calib.toml, each camera's detections to OpenPose JSON (a camera that
+sees no keypoint in a frame, and every frame without detections, writes "people": []), and
+the IMUs are sampled at IMU_RATE on the take's clock (sample k at k / IMU_RATE s, video
+frame f at f / 60 s). Each IMU reports its orientation in its own earth frame: the world
+turned about Z by a random heading psi (uniform in [-180, 180) degrees, one per sensor),
+    q_file = Rz(psi)^T R_world<-sensor,   so   R_world<-sensor = Rz(psi) q_file.
+
+Truth, beside the take's files (the reader never opens them): truth.json (per sensor
+heading_deg, mount as a rotation vector sensor -> bone frame, offset in metres in the bone
+frame; the detector's true keypoint sites), truth_skeleton.json, truth_thetas.npy
+((F, 66) poses at the video frames) and truth_rig.json (the unperturbed cameras).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, demo_motion, rotations
+from mocap.sim import imu
+from mocap.sim import take as sim_take
+from mocap.xsens_csv import TICKS_PER_S
+from mocap.take_folder import SEGMENT_BONES, ImuRecording, TakeFolder, write_take
+
+FRAME_RATE = 60.0  # Hz
+IMU_RATE = 100.0  # Hz: 100 SampleTimeFine ticks per sample
+BONE_SEGMENTS = {bone: segment for segment, bone in SEGMENT_BONES.items()}
+
+
+@dataclasses.dataclass
+class Truth:
+    skeleton: _core.Skeleton
+    thetas: np.ndarray  # (F, 66) at video frame f / FRAME_RATE
+    imus: list  # _core.ImuSite: true mount and offset; reference = Rz(heading)
+    headings_deg: np.ndarray  # (M,)
+    true_rig: _core.Rig
+    layout: _core.KeypointLayout
+    keypoint_sites: np.ndarray  # (K, 3) m, in each keypoint's bone frame
+
+
+def _people(keypoints: list, n_cameras: int, n_keypoints: int) -> list:
+    """[camera][frame] (P, K, 3) of the simulation's per-frame (C, K, 3) or None."""
+    none = np.zeros((0, n_keypoints, 3))
+    return [[none if k is None or not (k[c, :, 2] > 0).any() else k[c][None] for k in keypoints]
+            for c in range(n_cameras)]
+
+
+def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
+             imu_errors: imu.ImuErrors = imu.ImuErrors()) -> tuple[TakeFolder, Truth]:
+    """The take (IMU quaternions in each sensor's earth frame) and its truth."""
+    rng = np.random.default_rng(seed)
+    skeleton, thetas, dt = demo_motion.load_motion(FRAME_RATE, seconds)
+    config = sim_take.Config(preset=preset, imu=imu_errors)
+    t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
+    headings = rng.uniform(-180.0, 180.0, len(t.imus))
+    for s, h in zip(t.imus, headings):
+        s.reference = rotations.exp(np.array([0.0, 0.0, np.radians(h)]))
+    n = int(np.floor((len(thetas) - 1) * dt * IMU_RATE + 1e-9)) + 1
+    times = np.arange(n) * round(TICKS_PER_S / IMU_RATE) / TICKS_PER_S  # whole SampleTimeFine ticks, as read
+    quats, accs = sim_take.imu_readings(skeleton, t.imus, demo_motion.interpolate(thetas, times / dt), times,
+                                        config, rng)
+    names = skeleton.bone_names
+    imus = [ImuRecording(s.name, BONE_SEGMENTS[names[s.bone]], names[s.bone], times, quats[:, i], accs[:, i])
+            for i, s in enumerate(t.imus)]
+    take = TakeFolder(FRAME_RATE, len(thetas), "Z", t.rig, t.layout.name,
+                      _people(t.keypoints, len(t.rig.cameras), len(t.layout)), imus, IMU_RATE)
+    return take, Truth(skeleton, thetas, t.imus, headings, t.true_rig, t.layout, t.detector_sites)
+
+
+def write_truth(folder: Path, truth: Truth) -> None:
+    names = truth.skeleton.bone_names
+    (folder / "truth_skeleton.json").write_text(truth.skeleton.to_json())
+    (folder / "truth_rig.json").write_text(truth.true_rig.to_json())
+    np.save(folder / "truth_thetas.npy", truth.thetas)
+    sensors = {s.name: {"segment": BONE_SEGMENTS[names[s.bone]], "bone": names[s.bone], "heading_deg": float(h),
+                        "mount": rotations.log(np.asarray(s.mount)).tolist(), "offset": np.asarray(s.offset).tolist()}
+               for s, h in zip(truth.imus, truth.headings_deg)}
+    sites = [{"name": n, "bone": names[b], "offset": np.asarray(o).tolist()}
+             for n, b, o in zip(truth.layout.names, truth.layout.bones, truth.keypoint_sites)]
+    (folder / "truth.json").write_text(json.dumps({
+        "format": "mocap.take_truth/1",
+        "conventions": "R_world<-sensor = Rz(heading_deg) @ quaternion in the IMU file = R_world<-bone @ exp(mount); "
+                       "sensor site = bone origin + R_world<-bone @ offset (m); thetas at video frame f / frame_rate",
+        "frame_rate": FRAME_RATE, "skeleton": "truth_skeleton.json", "thetas": "truth_thetas.npy",
+        "rig": "truth_rig.json", "sensors": sensors, "keypoint_sites": sites}, indent=1) + "\n")
+
+
+def run(folder: Path, seconds: float, preset: str = "hq13", seed: int = 0) -> dict:
+    """`mocap simulate --take-out`: simulates, writes the take folder and its truth."""
+    take, truth = simulate(seconds, preset, seed)
+    write_take(folder, take)
+    write_truth(Path(folder), truth)
+    return {"take": str(folder), "frames": take.n_frames, "cameras": len(take.rig.cameras),
+            "imus": len(take.imus), "imu_samples": len(take.imus[0].times_s) if take.imus else 0}
