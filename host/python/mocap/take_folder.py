@@ -147,7 +147,10 @@ def _read_video(folder: Path, toml: _Toml, n_frames: int, world_from_take: np.nd
                     f"a list of {len(names)} folders (one per camera_names)")
     layout = LAYOUTS.get(toml.get("video", "keypoint_layout", str, lambda v: v in LAYOUTS, " or ".join(LAYOUTS)))
     rig = _rig(calib, names, world_from_take)
-    size = toml.data["video"].get("image_size")
+    size = None
+    if "image_size" in toml.data["video"]:
+        size = toml.get("video", "image_size", list, lambda v: len(v) == 2 and all(isinstance(x, int) for x in v),
+                        "[width, height] in pixels")
     for cam in rig.cameras if size is not None else []:
         if list(size) != [cam.width, cam.height]:
             raise toml.error("video", "image_size", f"{size} but {calib.name} gives {cam.name} "

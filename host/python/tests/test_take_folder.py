@@ -241,3 +241,9 @@ def test_world_up_units_and_layout_are_checked(take_dir):
     _raises(take_dir, take_dir / "take.toml", 11, match="keypoint_layout")
     (take_dir / "take.toml").write_text("[take\nframe_rate = 60")
     _raises(take_dir, take_dir / "take.toml", match="line 1")
+
+
+@pytest.mark.parametrize("size, message", [("1920", "is not .width, height"), ("[1280, 720]", "but Calib.toml gives")])
+def test_image_size_is_checked(take_dir, size, message):
+    _edit(take_dir / "take.toml", "image_size = [1920, 1080]", f"image_size = {size}")
+    _raises(take_dir, take_dir / "take.toml", 12, match=message)
