@@ -91,9 +91,18 @@ def _demo(args: argparse.Namespace) -> int:
 def _solve(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    import numpy as np
+    if bool(args.recording) == bool(args.take):
+        raise InputError("give exactly one of --recording FILE and --take DIR")
+    if args.take:
+        from mocap import take_solve
 
+        report = take_solve.solve_take(Path(args.take), Path(args.out))
+        print(json.dumps({"frames": report["frames"], "out": args.out, "skeleton_scales": report["skeleton"]["scales"]}),
+              flush=True)
+        return 0
     import tempfile
+
+    import numpy as np
 
     from mocap import _core, offline, recording
     from mocap.export.bvh import write_bvh
@@ -280,10 +289,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "speed) and the video-only solve of its keypoints against Pose2Sim's TRC")
     ee.set_defaults(func=_eval_edge)
 
-    so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline; write a BVH")
-    so.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
+    so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline (--out a BVH), or a take "
+                        "folder (--out a folder: joints.csv, take.bvh, calibration report)")
+    so.add_argument("--recording", default=None, help="MCAP file of `mocap record` / `mocap demo --record`")
+    so.add_argument("--take", default=None, help="take folder (docs/take_format.md)")
     so.add_argument("--session", default=None, help="session file (default: the one attached to the recording)")
-    so.add_argument("--out", required=True, help="BVH to write")
+    so.add_argument("--out", required=True, help="BVH to write (--recording) or output folder (--take)")
     so.add_argument("--csv", default=None, help="also write joint positions as CSV")
     so.set_defaults(func=_solve)
 
