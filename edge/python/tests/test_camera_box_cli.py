@@ -21,3 +21,9 @@ def test_hardware_that_is_absent_is_named_not_traced():
         assert out.returncode == 1 and "Traceback" not in out.stderr and out.stderr.startswith("mocap_edge:")
     out = run("--source", "v4l2:/dev/video9", "--bind", "tcp://127.0.0.1:0")
     assert out.returncode == 1 and "Traceback" not in out.stderr
+
+
+def test_mocap_detect_names_a_missing_video():
+    out = subprocess.run([sys.executable, "-m", "mocap.cli", "detect", "/nonexistent.mp4", "--out", "/tmp/unused"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and "no such file: /nonexistent.mp4" in out.stderr and "Traceback" not in out.stderr

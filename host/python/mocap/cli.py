@@ -9,6 +9,7 @@ import sys
 
 from mocap import paths
 from mocap.errors import DataMissingError, InputError, MocapError
+from mocap_edge.errors import EdgeError
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -328,7 +329,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(message)s")
     try:
         return args.func(args)
-    except (MocapError, OSError, ValueError) as e:
+    except (MocapError, EdgeError, OSError, ValueError) as e:
         print(f"mocap {args.command}: {e}", file=sys.stderr)
         return 2
 
