@@ -24,6 +24,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--model", default="blazepose", help="keypoint model: blazepose or a configuration JSON")
     p.add_argument("--trigger", metavar="CHIP:LINE", help="pair frames with the rising edges of this GPIO line "
                    "(e.g. /dev/gpiochip0:17; docs/sync.md)")
+    p.add_argument("--exposure-mid-us", type=float, default=0.0,
+                   help="with --trigger: trigger edge to mid-exposure (sensor delay + exposure / 2), microseconds")
     p.add_argument("--streams", help="stream file of the simulated studio (.npz, mocap_edge.streams)")
     p.add_argument("--bind", required=True, help="ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
     p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now)")
@@ -66,7 +68,8 @@ def _camera_box(a) -> int:
                 chip, _, line = a.trigger.rpartition(":")
                 pairing = TriggerPairing(GpiodTrigger(chip, int(line)), source.nominal_fps)
             counts = camera_box.run(source, a.camera or "cam0", a.bind, tuple(a.hs), pairing=pairing,
-                                    realtime=a.realtime, model=load_model(a.model))
+                                    realtime=a.realtime, model=load_model(a.model),
+                                    exposure_mid_ns=round(a.exposure_mid_us * 1000))
     except (EdgeError, ValueError) as e:  # ValueError: a --trigger line that is not a number
         print(f"mocap_edge: {e}", file=sys.stderr)
         return 1

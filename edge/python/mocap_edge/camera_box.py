@@ -52,14 +52,19 @@ def detections(frames: Iterable[Frame], tracker: Tracker, camera: str,
 
 def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple[int, int] = (1, 1),
         pairing: TriggerPairing | None = None, realtime: bool = False, model=None,
-        max_people: int = 2) -> BoxCounts:
+        max_people: int = 2, exposure_mid_ns: int = 0) -> BoxCounts:
     """Publishes every frame of `frames` (paired with trigger edges when given). realtime:
     a file source is played at its capture times instead of as fast as detection runs.
-    model: BlazePose (default) or a TopDownModel."""
+    model: BlazePose (default) or a TopDownModel. exposure_mid_ns: from the trigger edge
+    (which a paired frame's time is) to the middle of the exposure, the time KeypointFrame
+    names — the sensor's trigger delay plus half the exposure."""
     tracker = Tracker(model or BlazePose(), max_people=max_people)
     socket = transport.publisher(zmq.Context.instance(), endpoint)
     counts = BoxCounts()
-    source = pairing.pair(frames) if pairing else frames
+    source = frames
+    if pairing:
+        source = (dataclasses.replace(f, capture_time_ns=f.capture_time_ns + exposure_mid_ns)
+                  for f in pairing.pair(frames))
     try:
         for frame, people in detections(source, tracker, camera, detect_every):
             if realtime:

@@ -27,3 +27,40 @@ def test_mocap_detect_names_a_missing_video():
     out = subprocess.run([sys.executable, "-m", "mocap.cli", "detect", "/nonexistent.mp4", "--out", "/tmp/unused"],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 2 and "no such file: /nonexistent.mp4" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_paired_frames_carry_the_mid_exposure_time_of_their_trigger_edge():
+    import threading
+
+    import zmq
+
+    from mocap import transport, wire
+    from mocap_edge import camera_box
+    from mocap_edge.sources.base import open_source
+    from mocap_edge.trigger import FakeTrigger, TriggerPairing
+
+    start = 1_763_900_000_000_000_000
+    trigger = FakeTrigger(60.0, start_ns=start + 300_000, jitter_ns=50_000, count=12, clock=lambda: start + 10**10)
+    pairing = TriggerPairing(trigger, 60.0)
+    with zmq.Context.instance().socket(zmq.PUB) as probe:
+        endpoint = f"tcp://127.0.0.1:{probe.bind_to_random_port('tcp://127.0.0.1')}"
+    sub, got = transport.subscriber(zmq.Context.instance(), [endpoint]), []
+
+    def collect():
+        while len(got) < 10 and sub.poll(10_000):
+            got.append(wire.decode(sub.recv_multipart()))
+
+    def frames():  # the fake camera's clock: frame k at start + k / 60 s
+        import time
+        time.sleep(0.5)
+        with open_source("fake:", start_ns=start, count=10) as source:
+            yield from source
+
+    thread = threading.Thread(target=collect)
+    thread.start()
+    camera_box.run(frames(), "cam0", endpoint, pairing=pairing, exposure_mid_ns=2_000_000)
+    thread.join(timeout=60)
+    sub.close()
+    assert [m.frame_index for m in got] == list(range(10))
+    for m in got:  # the edge's time (with its jitter), then half a 4 ms exposure
+        assert m.capture_time_ns == trigger.edge_time(m.frame_index) + 2_000_000
