@@ -58,17 +58,27 @@ bool HostPipeline::Drop(const std::string& reason, const std::string& detail, st
   return false;
 }
 
-void HostPipeline::Count(StreamStats* stats, uint64_t counter, uint64_t modulo,
-                         int64_t latency_ns) {
+void HostPipeline::Count(StreamStats* stats, uint64_t counter, uint64_t modulo, int64_t time_ns,
+                         int64_t now_ns) {
+  constexpr uint64_t kLargestGap = 1u << 20;  // a jump this far ahead is a restart, not a loss
   stats->received_in_period++;
-  if (stats->last_counter) {
-    const uint64_t step = modulo ? (counter + modulo - *stats->last_counter) % modulo
-                                 : counter - *stats->last_counter;
-    if (step > 1 && step < (modulo ? modulo / 2 : 1u << 20)) stats->lost += step - 1;
-  }
-  if (!stats->last_counter || counter > *stats->last_counter || modulo)
+  stats->latency_ms.push_back(1e-6 * static_cast<double>(now_ns - time_ns));
+  if (!stats->last_counter) {
     stats->last_counter = counter;
-  stats->latency_ms.push_back(1e-6 * static_cast<double>(latency_ns));
+    stats->last_time_ns = time_ns;
+    return;
+  }
+  const uint64_t last = *stats->last_counter;
+  const uint64_t ahead = modulo ? (counter + modulo - last) % modulo : counter - last;
+  const bool forward = modulo ? ahead != 0 && ahead < modulo / 2 : counter > last;
+  if (forward) {
+    if (ahead > 1 && ahead < kLargestGap) stats->lost += ahead - 1;
+  } else if (time_ns <= stats->last_time_ns) {
+    if (stats->lost > 0) stats->lost--;  // a late message, counted lost when it was skipped
+    return;
+  }  // else: newer but counted back: the sender restarted its counter
+  stats->last_counter = counter;
+  stats->last_time_ns = time_ns;
 }
 
 bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
@@ -101,7 +111,7 @@ bool HostPipeline::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns,
                     std::to_string(n) + ")",
                 why);
   }
-  Count(&stats, frame.frame_index(), 0, now_ns - frame.capture_time_ns());
+  Count(&stats, frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
   CameraInput in;
   in.camera = c;
   in.time_ns = frame.capture_time_ns();
@@ -119,7 +129,7 @@ bool HostPipeline::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns,
 }
 
 bool HostPipeline::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why) {
-  Count(&hub_stats_[batch.hub_id()], batch.sequence(), 0, now_ns - batch.send_time_ns());
+  Count(&hub_stats_[batch.hub_id()], batch.sequence(), 0, batch.send_time_ns(), now_ns);
   int unknown = 0;
   for (const v1::ImuSample& s : batch.samples()) {
     const auto it = imu_index_.find(s.sensor_id());
@@ -127,7 +137,7 @@ bool HostPipeline::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::stri
       unknown++;
       continue;
     }
-    Count(&imu_stats_[it->second], s.packet_counter(), 1u << 16, now_ns - s.sample_time_ns());
+    Count(&imu_stats_[it->second], s.packet_counter(), 1u << 16, s.sample_time_ns(), now_ns);
     ImuInput in;
     in.imu = it->second;
     in.time_ns = s.sample_time_ns();

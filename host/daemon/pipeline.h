@@ -54,6 +54,7 @@ class HostPipeline {
   struct StreamStats {
     uint64_t received_in_period = 0, lost = 0, invalid = 0;
     std::optional<uint64_t> last_counter;  // frame index / sequence / packet counter
+    int64_t last_time_ns = 0;              // the sender's time of that message
     std::vector<double> latency_ms;        // arrival - capture, this period
   };
   HostPipeline(Session session, std::unique_ptr<Solver> solver);
@@ -63,7 +64,11 @@ class HostPipeline {
   // The subject among the frame's persons: nearest to the current pose's projection once
   // tracking, else the most confident.
   int ChooseSubject(const v1::KeypointFrame& frame, int camera) const;
-  void Count(StreamStats* stats, uint64_t counter, uint64_t modulo, int64_t latency_ns);
+  // Counts a message of a stream: its transport latency, and gaps in the sender's counter
+  // (lost messages). A counter behind the last one is a late message when the message is
+  // older too (it is no longer lost), a restart of the sender when it is newer.
+  void Count(StreamStats* stats, uint64_t counter, uint64_t modulo, int64_t time_ns,
+             int64_t now_ns);
 
   Session session_;
   std::unique_ptr<Solver> solver_;

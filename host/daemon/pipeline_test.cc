@@ -150,6 +150,26 @@ TEST(Pipeline, AStoppedCameraOrImuDegradesTheSolveWhichRecoversWhenItReturns) {
   }
 }
 
+TEST(Pipeline, LostFramesAreCountedAcrossReorderingAndABoxRestart) {
+  Studio studio;
+  auto pipeline = studio.Pipeline();
+  const std::string camera = studio.scene.rig.cameras[0].name;
+  // Frame indices as a box sends them: in order, one late (2: not lost), a gap of 2 (4, 5),
+  // then the box restarts (index back to 0, time going on) and loses one more (2).
+  const std::vector<std::pair<int, int>> sent = {{0, 0}, {1, 1},  {3, 3},  {2, 2}, {6, 6},
+                                                 {7, 7}, {0, 70}, {1, 71}, {3, 73}};
+  for (const auto& [index, k] : sent) {
+    v1::KeypointFrame f;
+    f.ParseFromString(studio.Keypoints(k % 90, 0));
+    f.set_frame_index(index);
+    f.set_capture_time_ns(kT0 + k * kFrame);
+    pipeline->Feed("mocap.v1.KeypointFrame", f.SerializeAsString(), kT0 + k * kFrame + kMs);
+  }
+  const v1::Health health = pipeline->Health(kT0 + 80 * kFrame);
+  ASSERT_EQ(health.streams(0).stream(), "camera/" + camera);
+  EXPECT_EQ(health.streams(0).lost(), 3u);  // 4 and 5 before the restart, 2 after it
+}
+
 TEST(Pipeline, ASessionFileThatIsWrongSaysWhat) {
   Session s;
   std::string error;
