@@ -75,7 +75,8 @@ def _record(args: argparse.Namespace) -> int:
 def _replay(args: argparse.Namespace) -> int:
     from mocap import recording
 
-    sent = recording.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics)
+    sent = recording.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics,
+                            restamp=args.restamp)
     print(json.dumps({"file": args.file, "sent": sent}), flush=True)
     return 0
 
@@ -313,6 +314,8 @@ def build_parser() -> argparse.ArgumentParser:
     pace = rep.add_mutually_exclusive_group()
     pace.add_argument("--speed", type=float, default=1.0, help="times real time (default 1)")
     pace.add_argument("--max-speed", action="store_true", help="as fast as the subscribers take the messages")
+    rep.add_argument("--restamp", action="store_true", help="move the recorded times to now, so that a live host "
+                     "(mocapd) takes the replay for a take happening now")
     rep.add_argument("--topics", nargs="+", default=None, metavar="PATTERN",
                      help="topic patterns to send (default: the inputs, /camera/* /imu/*)")
     rep.set_defaults(func=_replay)
