@@ -120,7 +120,7 @@ def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_po
     studio = live.prepare(tmp_path / "studio", seconds=3.0, seed=2)
     first = live.play(studio, record=tmp_path / "take.mcap")
     session = json_.loads(studio.session.read_text())
-    replay_endpoint, output = (f"tcp://127.0.0.1:{p}" for p in live._free_ports(2))
+    replay_endpoint, output = (f"tcp://127.0.0.1:{p}" for p in live.free_ports(2))
     session |= {"inputs": [replay_endpoint], "output": output}
     replay_session = studio.session.with_name("replay.json")
     replay_session.write_text(json_.dumps(session))

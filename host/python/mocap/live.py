@@ -41,7 +41,7 @@ class Studio:
     endpoints: dict[str, str]  # "cam0".. "hub0", "host" -> endpoint
 
 
-def _free_ports(n: int) -> list[int]:
+def free_ports(n: int) -> list[int]:
     socks = [socket.socket() for _ in range(n)]
     for s in socks:
         s.bind(("127.0.0.1", 0))
@@ -83,7 +83,7 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
                       np.round(t.times * 1e9).astype(np.int64), keypoints, detected, [s.name for s in t.imus],
                       np.round(imu_times * 1e9).astype(np.int64), quats, accs)
     streams.save(folder / "streams.npz")
-    ports = _free_ports(len(camera_ids) + 2)
+    ports = free_ports(len(camera_ids) + 2)
     endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host"], ports)}
     (folder / "skeleton.json").write_text(skeleton.to_json())
     (folder / "rig.json").write_text(t.rig.to_json())
