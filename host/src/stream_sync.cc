@@ -121,8 +121,9 @@ std::vector<SyncedFrame> StreamSynchroniser::TakeReady(int64_t now_ns) {
     const Group& front = pending_.front();
     const bool overflow = static_cast<int>(pending_.size()) > options_.max_pending_frames;
     const bool deadline = now_ns >= front.time_ns + options_.max_wait_ns;
-    if (!Complete(front, now_ns) && !deadline && !overflow) break;
-    if (!Complete(front, now_ns)) frames_forced_++;
+    const bool complete = Complete(front, now_ns);
+    if (!complete && !deadline && !overflow) break;
+    if (!complete) frames_forced_++;
     Group group = std::move(pending_.front());
     pending_.pop_front();
     ready.push_back(Release(std::move(group), now_ns));

@@ -15,7 +15,6 @@ from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
 from mocap_edge.detect import evaluation, tracking
 from mocap_edge.detect.blazepose import BlazePose, Person
 from mocap_edge.detect.layouts import load as load_layout
-from mocap_edge.detect.openpose_json import read_frame
 from mocap_edge.detect.roi import Roi
 
 needs_trial = pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(),
@@ -45,8 +44,7 @@ def test_video_only_solve_of_the_four_views_lands_near_pose2sims_3d(tracked):
     found, _ = tracked
     keypoints = np.array([[p.keypoints if p is not None else np.zeros((33, 3)) for p in found[c]]
                           for c in evaluation.CAMERAS])
-    openpose = [[max(read_frame(p), key=evaluation.box_size)
-                 for p in sorted((TRIAL_CACHE / "pose" / f"cam{c}_json").glob("*.json"))] for c in evaluation.CAMERAS]
+    openpose = [evaluation.openpose_subjects(TRIAL_CACHE, c) for c in evaluation.CAMERAS]
     result = real_trial.solve(TRIAL_CACHE, keypoints, openpose)
     assert result["trc_axes"] == [[0, 0, 1], [1, 0, 0], [0, 1, 0]]  # Pose2Sim's Y-up TRC in the Z-up lab
     assert result["distance_cm"] < 6.0, result  # measured 4.5 (docs/results_real.md)
@@ -64,7 +62,7 @@ def test_detect_command_writes_one_openpose_file_per_frame(tmp_path):
     first = json.loads(files[0].read_text())
     assert first["keypoint_layout"] == "blazepose33" and len(first["keypoint_names"]) == 33
     ours = max((np.array(p["pose_keypoints_2d"]).reshape(33, 3) for p in first["people"]), key=evaluation.box_size)
-    truth = evaluation.openpose_subject(TRIAL_CACHE, 1, 0)
+    truth = evaluation.openpose_subjects(TRIAL_CACHE, 1)[0][:17]
     d = np.linalg.norm(ours[evaluation.COCO_FROM_BLAZEPOSE, :2] - truth[:, :2], axis=1)[truth[:, 2] > 0]
     assert np.median(d) < 0.05 * evaluation.box_size(truth)
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import demo_motion, retarget
+from mocap import demo_motion, real_trial, retarget
 from mocap.demo_data import TRIAL
 
 # joints.csv columns -> Pose2Sim's TRC markers (triangulated OpenPose keypoints). Our "head"
@@ -44,10 +44,7 @@ def compare(trial: Path, joints_csv: Path, rate: float = 60.0) -> dict:
     theirs = reference[:, [trc.names.index(m) for m in MARKERS.values()]]
     n = min(len(ours), len(theirs))
     d = np.linalg.norm(ours[:n] - theirs[:n], axis=-1)
-
-    def jitter(x):
-        return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * rate**2)
-
     return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)),
             "per_joint_cm": {j: 100 * float(np.nanmean(d[:, i])) for i, j in enumerate(MARKERS)},
-            "jitter_ours_ms2": jitter(ours[:n]), "jitter_pose2sim_ms2": jitter(theirs[:n])}
+            "jitter_ours_ms2": real_trial.jitter(ours[:n], rate),
+            "jitter_pose2sim_ms2": real_trial.jitter(theirs[:n], rate)}

@@ -78,19 +78,19 @@ def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) 
     d = np.linalg.norm(solved[:n] - reference[:n], axis=-1)  # (F, M)
     return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)), "distance_median_cm": 100 * float(np.nanmedian(d)),
             "per_marker_cm": {m: 100 * float(np.nanmean(d[:, i])) for i, m in enumerate(trc.names)},
-            "jitter_ours_ms2": _jitter(solved[:n]), "jitter_pose2sim_ms2": _jitter(reference[:n]),
+            "jitter_ours_ms2": jitter(solved[:n]), "jitter_pose2sim_ms2": jitter(reference[:n]),
             "trc_axes": r.astype(int).tolist()}
 
 
-def _jitter(x: np.ndarray) -> float:
-    return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * RATE**2)
+def jitter(x: np.ndarray, rate: float = RATE) -> float:
+    """Mean |second difference| of points (F, ..., 3) x rate^2, m/s^2."""
+    return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * rate**2)
 
 
 def evaluate(trial: Path) -> dict:
     """`mocap eval-edge`: the edge detector's PCK and speed (mocap_edge.detect.evaluation)
     and the video-only solve of its keypoints against Pose2Sim's TRC."""
     from mocap_edge.detect import evaluation
-    from mocap_edge.detect.openpose_json import read_frame
 
     videos = evaluation.load_trial(trial)
     model = evaluation.BlazePose()
@@ -101,8 +101,7 @@ def evaluate(trial: Path) -> dict:
         for f, person in enumerate(found[c]):
             if person is not None:
                 keypoints[i, f] = person.keypoints
-    openpose = [[max(read_frame(p), key=evaluation.box_size) for p in sorted((trial / "pose" / f"cam{c}_json").glob("*.json"))]
-                for c in evaluation.CAMERAS]
+    openpose = [evaluation.openpose_subjects(trial, c) for c in evaluation.CAMERAS]
     return {"detector_tracked": evaluation.pck(trial, found) | speed,
             "detector_naive": evaluation.pck(trial, naive) | naive_speed,
             "video_only_solve": solve(trial, keypoints, openpose)}

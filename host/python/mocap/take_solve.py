@@ -23,6 +23,7 @@ from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
 from mocap.solver import Solver
 from mocap.take_folder import TakeFolder, read_take
+from mocap_edge.detect.openpose_json import box_size
 
 SKELETON_SECONDS = 5.0  # the first seconds the skeleton is estimated from
 # Joint centre -> the bone whose origin it is.
@@ -30,11 +31,6 @@ JOINTS = {"head": "head", "left_shoulder": "upper_arm_l", "right_shoulder": "upp
           "left_elbow": "forearm_l", "right_elbow": "forearm_r", "left_wrist": "hand_l", "right_wrist": "hand_r",
           "left_hip": "thigh_l", "right_hip": "thigh_r", "left_knee": "shin_l", "right_knee": "shin_r",
           "left_ankle": "foot_l", "right_ankle": "foot_r"}
-
-
-def _box(k: np.ndarray) -> float:
-    v = k[k[:, 2] > 0, :2]
-    return float((v.max(axis=0) - v.min(axis=0)).max()) if len(v) > 1 else 0.0
 
 
 def subject(take: TakeFolder) -> np.ndarray:
@@ -49,7 +45,7 @@ def subject(take: TakeFolder) -> np.ndarray:
                 previous = None
                 continue
             if previous is None:
-                chosen = max(people, key=_box)
+                chosen = max(people, key=box_size)
             else:
                 def distance(p):
                     both = (p[:, 2] > 0) & (previous[:, 2] > 0)

@@ -33,7 +33,7 @@ class Person:
     next_roi: roi.Roi  # where to look in the next frame
 
 
-def _session(path: Path, threads: int) -> ort.InferenceSession:
+def onnx_session(path: Path, threads: int) -> ort.InferenceSession:
     options = ort.SessionOptions()
     options.intra_op_num_threads = threads
     options.inter_op_num_threads = 1
@@ -42,8 +42,8 @@ def _session(path: Path, threads: int) -> ort.InferenceSession:
 
 class BlazePose:
     def __init__(self, models: Path = MODELS, threads: int = 2, min_detection: float = 0.5):
-        self.detector = _session(models / "pose_detection.onnx", threads)
-        self.landmarker = _session(models / "pose_landmark_full.onnx", threads)
+        self.detector = onnx_session(models / "pose_detection.onnx", threads)
+        self.landmarker = onnx_session(models / "pose_landmark_full.onnx", threads)
         self.anchors = anchors.ssd_anchors()
         self.layout = layouts.load("blazepose33")
         self.min_detection = min_detection

@@ -11,14 +11,13 @@ tracking and packing, and naively (person detector + one landmark inference per 
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
 import numpy as np
 
 from mocap_edge.detect.blazepose import BlazePose, Person
-from mocap_edge.detect.openpose_json import read_frame
+from mocap_edge.detect.openpose_json import box_size, largest_people
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import open_source
 
@@ -35,15 +34,10 @@ def load_trial(trial: Path, cameras=CAMERAS, frames: int | None = None) -> dict[
     return out
 
 
-def box_size(k: np.ndarray) -> float:
-    v = k[k[:, 2] > 0, :2]
-    return float((v.max(axis=0) - v.min(axis=0)).max()) if len(v) > 1 else 0.0
-
-
-def openpose_subject(trial: Path, camera: int, frame: int) -> np.ndarray:
-    """(17, 3) the largest person of OpenPose's file, COCO keypoints."""
-    path = sorted((trial / "pose" / f"cam{camera}_json").glob("*.json"))[frame]
-    return max((k[:17] for k in read_frame(path)), key=box_size)
+def openpose_subjects(trial: Path, camera: int) -> list[np.ndarray]:
+    """(25, 3) per frame: the largest person of OpenPose's files of a camera (BODY_25B; its
+    first 17 keypoints are COCO's)."""
+    return largest_people(trial / "pose" / f"cam{camera}_json")
 
 
 def subject(people: list[Person]) -> Person | None:
@@ -86,8 +80,9 @@ def pck(trial: Path, detections: dict[int, list]) -> dict:
     for c, people in detections.items():
         for a in hits:
             hits[a][c] = []
+        subjects = openpose_subjects(trial, c)
         for f, person in enumerate(people):
-            truth = openpose_subject(trial, c, f)
+            truth = subjects[f][:17]
             seen, scale = truth[:, 2] > 0, box_size(truth)
             d = (np.full(17, np.inf) if person is None
                  else np.linalg.norm(person.keypoints[COCO_FROM_BLAZEPOSE, :2] - truth[:, :2], axis=1))
@@ -96,16 +91,6 @@ def pck(trial: Path, detections: dict[int, list]) -> dict:
     result = {f"pck{int(a * 100):02d}": float(np.mean(sum(v.values(), []))) for a, v in hits.items()}
     result["per_camera"] = {c: {f"pck{int(a * 100):02d}": float(np.mean(hits[a][c])) for a in hits} for c in detections}
     return result
-
-
-def report(trial: Path) -> dict:
-    """Accuracy and throughput as `mocap eval-detector` prints them."""
-    model = BlazePose()
-    videos = load_trial(trial)
-    tracked, speed = run(model, videos)
-    naive, naive_speed = run(model, videos, pack=False)
-    return {"bench": "edge-accuracy", "tracked": pck(trial, tracked) | speed, "naive": pck(trial, naive) | naive_speed}
-
 
 
 def bench(trial: Path) -> dict:
@@ -124,10 +109,3 @@ def bench(trial: Path) -> dict:
     return {"bench": "edge", **per_process[1], "cameras_per_process": per_process,
             "hs_fps_per_camera": hs["fps_per_camera"], "hs_inferred_fps_per_camera": hs["inferred_fps_per_camera"],
             "model": "BlazePose full (MediaPipe 0.10.14) on onnxruntime, 2 threads"}
-
-
-if __name__ == "__main__":
-    from mocap.demo_data import fetch_trial
-
-    print(json.dumps(report(fetch_trial()), indent=1))
-    print(json.dumps(bench(fetch_trial())))

@@ -30,6 +30,22 @@ def write_frame(path: Path, people: list[np.ndarray], index: int, capture_time_n
                                       "frame_index": index, "capture_time_ns": capture_time_ns, "people": out}))
 
 
+def box_size(k: np.ndarray) -> float:
+    """The larger side of the box around a person's detected keypoints (K, 3), pixels."""
+    v = k[k[:, 2] > 0, :2]
+    return float((v.max(axis=0) - v.min(axis=0)).max()) if len(v) > 1 else 0.0
+
+
+def largest_people(folder: Path) -> list[np.ndarray]:
+    """(K, 3) the largest person of each file of a pose folder, in frame order (zeros where
+    the file has nobody)."""
+    out = []
+    for path in sorted(Path(folder).glob("*.json")):
+        people = read_frame(path)
+        out.append(max(people, key=box_size) if people else np.zeros((0, 3)))
+    return out
+
+
 def read_frame(path: Path) -> list[np.ndarray]:
     """(K, 3) per person of an OpenPose-style file (any layout)."""
     data = json.loads(Path(path).read_text())

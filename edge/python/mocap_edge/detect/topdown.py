@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap_edge.detect import decoders, layouts, roi
-from mocap_edge.detect.blazepose import BlazePose, Person, _session
+from mocap_edge.detect.blazepose import BlazePose, Person, onnx_session
 from mocap_edge.errors import EdgeError
 
 
@@ -62,7 +62,7 @@ class TopDownModel:
     def __init__(self, config: ModelConfig, threads: int = 2, people: BlazePose | None = None):
         self.config = config
         self.layout = layouts.load(config.layout)
-        self.session = _session(config.onnx, threads)
+        self.session = onnx_session(config.onnx, threads)
         self.people = people or BlazePose(threads=threads)
         self.batchable = not isinstance(self.session.get_inputs()[0].shape[0], int)
 
