@@ -16,6 +16,7 @@
 #include "mocap/skeleton.h"
 #include "mocap/so3.h"
 #include "mocap/solver.h"
+#include "mocap/window_calibration.h"
 #include "pipeline.h"
 
 namespace py = pybind11;
@@ -216,6 +217,14 @@ PYBIND11_MODULE(_core, m) {
                                  o.row(k) = l.sites[k].offset.transpose();
                                return o;
                              })
+      .def(
+          "with_offsets",
+          [](KeypointLayout l, const Eigen::MatrixX3d& offsets) {
+            if (offsets.rows() != l.size()) throw std::invalid_argument("one offset per keypoint");
+            for (int k = 0; k < l.size(); ++k) l.sites[k].offset = offsets.row(k).transpose();
+            return l;
+          },
+          "A copy whose sites have these (K, 3) offsets (m, bone frames).")
       .def("__len__", &KeypointLayout::size);
 
   py::class_<ImuSite>(m, "ImuSite")
@@ -406,6 +415,63 @@ PYBIND11_MODULE(_core, m) {
       .def("set_warm_start", &Solver::SetWarmStart)
       .def_property_readonly("pose", &Solver::pose)
       .def_property_readonly("initialised", &Solver::initialised);
+
+  py::class_<CalibrationOptions>(m, "CalibrationOptions")
+      .def(py::init<>())
+      .def_readwrite("terms", &CalibrationOptions::terms)
+      .def_readwrite("scale_group", &CalibrationOptions::scale_group)
+      .def_readwrite("shift_group", &CalibrationOptions::shift_group)
+      .def_readwrite("scale_sigma", &CalibrationOptions::scale_sigma)
+      .def_readwrite("shift_sigma", &CalibrationOptions::shift_sigma)
+      .def_readwrite("estimate_shifts", &CalibrationOptions::estimate_shifts)
+      .def_readwrite("site_sigma", &CalibrationOptions::site_sigma)
+      .def_readwrite("estimate_scales", &CalibrationOptions::estimate_scales)
+      .def_readwrite("estimate_sites", &CalibrationOptions::estimate_sites)
+      .def_readwrite("estimate_mounts", &CalibrationOptions::estimate_mounts)
+      .def_readwrite("estimate_headings", &CalibrationOptions::estimate_headings)
+      .def_readwrite("max_iterations", &CalibrationOptions::max_iterations)
+      .def_readwrite("num_threads", &CalibrationOptions::num_threads);
+  py::class_<CalibrationResult>(m, "CalibrationResult")
+      .def_readonly("skeleton", &CalibrationResult::skeleton)
+      .def_readonly("layout", &CalibrationResult::layout)
+      .def_readonly("imus", &CalibrationResult::imus)
+      .def_readonly("scales", &CalibrationResult::scales)
+      .def_readonly("shifts", &CalibrationResult::shifts)
+      .def_readonly("thetas", &CalibrationResult::thetas)
+      .def_readonly("imu_residual_deg", &CalibrationResult::imu_residual_deg)
+      .def_readonly("keypoint_observations", &CalibrationResult::keypoint_observations)
+      .def_readonly("initial_cost", &CalibrationResult::initial_cost)
+      .def_readonly("final_cost", &CalibrationResult::final_cost)
+      .def_readonly("iterations", &CalibrationResult::iterations)
+      .def_readonly("converged", &CalibrationResult::converged)
+      .def_readonly("message", &CalibrationResult::message);
+  m.def(
+      "calibrate_window",
+      [](const Skeleton& s, const Rig& r, const KeypointLayout& l, const std::vector<ImuSite>& i,
+         std::optional<PosePrior> p, const py::list& frames, const std::vector<Eigen::VectorXd>& thetas,
+         const CalibrationOptions& o) {
+        std::vector<FrameObservations> obs;
+        for (const py::handle& f : frames) {
+          const auto t = f.cast<py::tuple>();
+          if (t.size() != 6) throw std::invalid_argument("a frame is (time, cameras, keypoints, imus, quaternions, accelerations)");
+          obs.push_back(MakeFrame(t[0].cast<double>(), t[1].cast<std::vector<int>>(), t[2].cast<Array>(),
+                                  t[3].cast<std::vector<int>>(), t[4].cast<Array>(), t[5].cast<Array>()));
+        }
+        CalibrationResult result;
+        std::string e;
+        bool ok;
+        {
+          py::gil_scoped_release release;
+          ok = CalibrateWindow(s, r, l, i, p, obs, thetas, o, &result, &e);
+        }
+        if (!ok) throw std::invalid_argument(e);
+        return result;
+      },
+      py::arg("skeleton"), py::arg("rig"), py::arg("layout"), py::arg("imus"), py::arg("prior"),
+      py::arg("frames"), py::arg("thetas"), py::arg("options") = CalibrationOptions(),
+      "Bone lengths, keypoint sites, IMU mountings and headings over a window of frames "
+      "(window_calibration.h). frames: [(time, cameras, keypoints, imus, quaternions, "
+      "accelerations)] as Solver.solve takes them; thetas: the frames' starting poses.");
 
   // The live host's pipeline without the transport (host/daemon/pipeline.h): an offline
   // solve of a recording feeds it the recorded messages with their arrival times.

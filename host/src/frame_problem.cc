@@ -17,6 +17,8 @@ ceres::Problem::Options BorrowingProblem() {
   return o;
 }
 
+}  // namespace
+
 ceres::LossFunction* MakeLoss(const TermOptions& t) {
   switch (t.loss) {
     case LossType::kCauchy:
@@ -28,8 +30,6 @@ ceres::LossFunction* MakeLoss(const TermOptions& t) {
   }
   return nullptr;
 }
-
-}  // namespace
 
 FrameProblem::FrameProblem(const Skeleton& skeleton, double* theta)
     : skeleton_(skeleton), theta_(theta), fk_(&skeleton), problem_(BorrowingProblem()) {

@@ -28,6 +28,9 @@ enum Term {
   kPointTerm  // not one of the paper's five: 3D targets (FitToPoints)
 };
 
+// The loss a term's options name (null for the trivial loss); the caller owns it.
+ceres::LossFunction* MakeLoss(const TermOptions& term);
+
 class FrameProblem {
  public:
   // theta must outlive the problem; Ceres updates it in place.

@@ -186,7 +186,8 @@ def _eval(args: argparse.Namespace) -> int:
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
-    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline) for clip in clips]
+    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline, args.calibration)
+               for clip in clips]
     summary = evaluation.summarise(results)
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
@@ -251,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "triangulation + swap fix + one-euro smoothing + bone-length fit")
     e.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                    help="a solver option, e.g. acceleration.weight=0.01 (repeatable)")
+    e.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
+                   help="estimated: skeleton, IMU mounting and heading from the take's first 5 s "
+                        "(mocap.calibration.window); oracle: the true ones (default estimated)")
     e.add_argument("--json", help="JSON file to write the results to")
     e.add_argument("--table", choices=["paper"], help="regenerate the paper's tables and plots on the test clips")
     e.add_argument("--docs", default=str(paths.REPO / "docs"), help="where --table writes results.md (default docs/)")

@@ -3,7 +3,10 @@
 Metrics, as the paper plus jitter: mean joint position error (cm, the 21 bone origins,
 global, no alignment), mean bone orientation error (deg), mean joint velocity error
 (cm/s, finite differences over the frames' true times), per joint, and the per-frame
-solve time. floor_cm is the position error left when only the systematic errors act
+solve time; joint_centres_pos_cm / _vel_cms: the same over the 13 anatomical joint centres
+(mocap.joint_centres), the fair comparison of solves made with different skeletons (the
+estimated calibration's skeleton puts the pelvis origin, spine and clavicles where its own
+convention does, not where the clip's skeleton does). floor_cm is the position error left when only the systematic errors act
 (site offsets and camera perturbation, no random noise), triangulated exactly: the
 mean error of the joint-centre keypoints' DLT triangulation against the true joints.
 """
@@ -12,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap import _core, baselines, rotations, studio
+from mocap import _core, baselines, joint_centres, rotations, studio
+from mocap.calibration import window
 from mocap.sim import take as sim_take
 from mocap.solver import Solver, solver_options
 
@@ -29,9 +33,13 @@ def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOption
     return options
 
 
-def solve(t: sim_take.Take, options: _core.SolverOptions) -> tuple[np.ndarray, np.ndarray]:
-    """Solved poses (F, 66) and solve times (F,) ms of a take."""
-    solver = Solver(t.skeleton, t.rig, t.layout, t.imus, options=options)
+def solve(t: sim_take.Take, options: _core.SolverOptions,
+          calibration: window.Calibration | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Solved poses (F, 66) and solve times (F,) ms of a take, with the oracle calibration
+    (the take's skeleton, nominal layout and true IMU sites) or an estimated one."""
+    c = calibration
+    solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
+              else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
     sensors = list(range(len(t.imus)))
     thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
     for f in range(len(t.thetas)):
@@ -64,17 +72,23 @@ def imu_only(t: sim_take.Take) -> np.ndarray:
     return thetas
 
 
-def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: float) -> dict:
+def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: float,
+           solved_skeleton: _core.Skeleton | None = None) -> dict:
+    """Errors of solved poses against the truth; solved_skeleton: the skeleton they were solved
+    with, when it is not the true one (estimated calibration)."""
     fk_t = [skeleton.forward_kinematics(th) for th in truth]
-    fk_s = [skeleton.forward_kinematics(th) for th in solved]
+    fk_s = [(solved_skeleton or skeleton).forward_kinematics(th) for th in solved]
     p_t, p_s = np.array([p for _, p in fk_t]), np.array([p for _, p in fk_s])
     r_t, r_s = np.array([r for r, _ in fk_t]), np.array([r for r, _ in fk_s])
     pos = np.linalg.norm(p_s - p_t, axis=-1)  # (F, J) m
     ori = np.degrees(rotations.angle_between(r_s, r_t))  # (F, J)
     vel = np.linalg.norm(np.diff(p_s, axis=0) - np.diff(p_t, axis=0), axis=-1) / dt  # (F-1, J) m/s
     names = skeleton.bone_names
+    centres = joint_centres.bone_indices(names)
     return {"pos_error_cm": 100 * float(pos.mean()), "ori_error_deg": float(ori.mean()),
             "vel_error_cms": 100 * float(vel.mean()),
+            "joint_centres_pos_cm": 100 * float(pos[:, centres].mean()),
+            "joint_centres_vel_cms": 100 * float(vel[:, centres].mean()),
             "per_joint": {n: {"pos_cm": 100 * float(pos[:, j].mean()), "ori_deg": float(ori[:, j].mean())}
                           for j, n in enumerate(names)},
             "pos_error_cm_per_frame": (100 * pos.mean(axis=1)).round(3).tolist()}
@@ -109,24 +123,38 @@ def floor_cm(t: sim_take.Take) -> float:
     return 100 * float(np.mean(errs)) if errs else float("nan")
 
 
+def estimate_calibration(t: sim_take.Take) -> window.Calibration:
+    """The take's calibration from its own first seconds (mocap.calibration.window): nothing of
+    the truth is used (the IMU readings' reference frames are treated as unknown too)."""
+    cams, k = len(t.rig.cameras), len(t.layout)
+    det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
+    readings = window.ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions,
+                                  t.accelerations)
+    return window.estimate(t.rig, det, t.times, t.layout.name, readings)
+
+
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
-             baseline: str | None = None) -> dict:
-    """Scores the fused solver, or a baseline: "imu-only" or "triangulation" (baselines.py)."""
+             baseline: str | None = None, calibration: str = "oracle") -> dict:
+    """Scores the fused solver, or a baseline: "imu-only" or "triangulation" (baselines.py).
+    calibration: "oracle" (the true skeleton and IMU mounting) or "estimated" (fused solver only)."""
     rng = np.random.default_rng(seed)
     t = sim_take.simulate(clip, config, rng)
+    estimated = estimate_calibration(t) if calibration == "estimated" and baseline is None else None
     if baseline == "imu-only":
         solved, ms = imu_only(t), np.zeros(len(t.thetas))
     elif baseline == "triangulation":
         solved, ms = baselines.video_only(t), np.zeros(len(t.thetas))
     else:
-        solved, ms = solve(t, options_for(omit, settings))
-    result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate)
+        solved, ms = solve(t, options_for(omit, settings), estimated)
+    result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate, estimated.skeleton if estimated else None)
     result.update({"clip": str(clip), "method": baseline or "fused", "preset": config.preset,
                    "cameras": len(t.rig.cameras),
                    "imus": len(t.imus), "omit": omit, "settings": list(settings),
                    "site_offsets": config.detector.site_offsets,
                    "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
-                   "calibration": t.calibration, "floor_cm": floor_cm(t)})
+                   "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
+    if estimated:
+        result["calibration_report"] = estimated.report
     return result
 
 
@@ -134,7 +162,8 @@ def summarise(results: list[dict]) -> dict:
     """Means over clips (weighted by frames) of the headline metrics, and every clip's result."""
     frames = np.array([r["frames"] for r in results], dtype=float)
     mean = {k: float(np.average([r[k] for r in results], weights=frames))
-            for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "floor_cm")}
+            for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm",
+                      "joint_centres_vel_cms", "floor_cm")}
     first = results[0]
     return {**mean, "frames": int(frames.sum()), "solve_ms_median": float(np.median([r["solve_ms_median"] for r in results])),
             "calibration": first["calibration"], "method": first["method"], "preset": first["preset"],

@@ -21,16 +21,13 @@ from mocap import _core, paths
 from mocap.calibration import skeleton as skeleton_estimate
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
+from mocap.joint_centres import JOINTS, bone_indices
 from mocap.solver import Solver
 from mocap.take_folder import TakeFolder, read_take
 from mocap_edge.detect.openpose_json import box_size
 
 SKELETON_SECONDS = 5.0  # the first seconds the skeleton is estimated from
-# Joint centre -> the bone whose origin it is.
-JOINTS = {"head": "head", "left_shoulder": "upper_arm_l", "right_shoulder": "upper_arm_r",
-          "left_elbow": "forearm_l", "right_elbow": "forearm_r", "left_wrist": "hand_l", "right_wrist": "hand_r",
-          "left_hip": "thigh_l", "right_hip": "thigh_r", "left_knee": "shin_l", "right_knee": "shin_r",
-          "left_ankle": "foot_l", "right_ankle": "foot_r"}
+
 
 
 def subject(take: TakeFolder) -> np.ndarray:
@@ -88,7 +85,7 @@ def solve_take(folder: Path, out: Path) -> dict:
 
 
 def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: TakeFolder) -> None:
-    bones = [skel.bone_names.index(b) for b in JOINTS.values()]
+    bones = bone_indices(skel.bone_names)
     back = take.world_from_take.T  # ours -> the take's world
     with open(path, "w", newline="") as f:
         w = csv.writer(f)

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "mocap/residuals/acceleration_residual.h"
+#include "mocap/residuals/calibration_residuals.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
@@ -90,6 +91,114 @@ TEST_F(ResidualsTest, Orientation) {
     ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
                           testing::Perturb(truth_, 0.2, 0.1, &rng_));
     ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
+  }
+}
+
+// Parameter blocks of a calibration residual: a copy of theta's chain, then extra blocks.
+struct CalibrationBlocks {
+  Eigen::VectorXd theta;
+  std::vector<std::vector<double>> extra;
+  std::vector<double*> Pointers(const Skeleton& s, int bone) {
+    std::vector<double*> p = ChainBlocks(s, bone, theta.data());
+    for (auto& e : extra) p.push_back(e.data());
+    return p;
+  }
+};
+
+void ExpectAllJacobiansCorrect(const ceres::CostFunction& f, std::vector<double*> blocks) {
+  ceres::NumericDiffOptions numeric;
+  const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+  ceres::GradientChecker checker(&f, no_manifolds, numeric);
+  ceres::GradientChecker::ProbeResults results;
+  EXPECT_TRUE(checker.Probe(blocks.data(), kJacobianRelativePrecision, &results))
+      << results.error_log;
+}
+
+TEST_F(ResidualsTest, SiteReprojectionWithScalesAndSiteAsParameters) {
+  // Length groups: each limb pair and the trunk; the site and the scales move the point.
+  std::vector<int> group(scene_.skeleton.num_bones(), -1), shift(group);
+  for (int b = 1; b < scene_.skeleton.num_bones(); ++b) group[b] = b % 4;
+  for (const char* name : {"thigh_l", "thigh_r", "clavicle_l", "clavicle_r", "neck"})
+    shift[scene_.skeleton.BoneIndex(name)] = std::string(name) == "neck" ? 1 : 0;
+  const Camera& cam = scene_.rig.cameras[0];
+  int checked = 0;
+  for (const Site& site : scene_.layout.sites) {
+    Eigen::Vector2d px;
+    if (!cam.Project(pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset, &px))
+      continue;
+    ScaledChain chain(&scene_.skeleton, site.bone, group, shift);
+    SiteReprojectionResidual f(chain, &cam, px, 0.8, 0.04);
+    CalibrationBlocks at{truth_, {{site.offset.x(), site.offset.y(), site.offset.z()}}};
+    for (int u = 0; u < chain.num_scale_blocks(); ++u) at.extra.push_back({1.0});
+    for (int v = 0; v < chain.num_shift_blocks(); ++v) at.extra.push_back({0.0, 0.0, 0.0});
+    Eigen::Vector2d r;
+    ASSERT_TRUE(f.Evaluate(at.Pointers(scene_.skeleton, site.bone).data(), r.data(), nullptr));
+    EXPECT_LT(r.norm(), 1e-9);  // zero at the truth with unit scales
+    CalibrationBlocks away{testing::Perturb(truth_, 0.1, 0.05, &rng_), at.extra};
+    away.extra[0][1] += 0.02;
+    for (size_t u = 1; u < away.extra.size(); ++u) {
+      for (double& v : away.extra[u]) v += 0.05 * u;
+    }
+    ExpectAllJacobiansCorrect(f, away.Pointers(scene_.skeleton, site.bone));
+    ++checked;
+  }
+  EXPECT_GT(checked, 20);
+  // A scale of 1.1 on every group moves a hand keypoint as a 10% longer skeleton does.
+  std::vector<Skeleton::Bone> bones = scene_.skeleton.bones();
+  for (size_t b = 1; b < bones.size(); ++b) bones[b].offset *= 1.1;
+  Skeleton longer;
+  std::string error;
+  ASSERT_TRUE(Skeleton::Create(bones, &longer, &error)) << error;
+  const std::vector<int> one_group(scene_.skeleton.num_bones(), 0);
+  const int hand = scene_.skeleton.BoneIndex("hand_l");
+  BodyPose expected;
+  ForwardKinematics(longer, truth_.data(), &expected);
+  Eigen::Vector2d px;
+  ASSERT_TRUE(cam.Project(expected.position[hand], &px));
+  SiteReprojectionResidual f(ScaledChain(&scene_.skeleton, hand, one_group), &cam, px, 1.0, 1.0);
+  CalibrationBlocks at{truth_, {{0.0, 0.0, 0.0}, {1.1}}};
+  Eigen::Vector2d r;
+  ASSERT_TRUE(f.Evaluate(at.Pointers(scene_.skeleton, hand).data(), r.data(), nullptr));
+  EXPECT_LT(r.norm(), 1e-9);
+}
+
+TEST_F(ResidualsTest, ShiftGroupsMoveLeftAndRightMirrored) {
+  // One shift group for both hips: a shift of (0.01, 0.02, 0.03) moves the left hip by it and
+  // the right hip by (0.01, -0.02, 0.03), in the pelvis frame.
+  std::vector<int> shift(scene_.skeleton.num_bones(), -1);
+  const int left = scene_.skeleton.BoneIndex("thigh_l"), right = scene_.skeleton.BoneIndex("thigh_r");
+  shift[left] = shift[right] = 0;
+  const Eigen::Vector3d d(0.01, 0.02, 0.03);
+  for (const auto& [bone, moved] : {std::pair{left, d}, std::pair{right, Eigen::Vector3d(0.01, -0.02, 0.03)}}) {
+    ScaledChain chain(&scene_.skeleton, bone, {}, shift);
+    ASSERT_EQ(chain.num_shift_blocks(), 1);
+    std::vector<double*> blocks = ChainBlocks(scene_.skeleton, bone, truth_.data());
+    const double* shifts[1] = {d.data()};
+    BodyPose pose;
+    chain.Pose(blocks.data(), nullptr, shifts, &pose);
+    const Eigen::Vector3d expected = pose_.position[bone] + pose_.rotation[0] * moved;
+    EXPECT_LT((pose.position[bone] - expected).norm(), 1e-12);
+  }
+}
+
+TEST_F(ResidualsTest, MountedOrientationWithMountingAndHeadingAsParameters) {
+  for (const ImuSite& site : scene_.imus) {
+    // Measured in a reference frame turned by 0.7 rad about z: the heading 0.7 undoes it.
+    const Eigen::Matrix3d measured =
+        Exp(Eigen::Vector3d(0, 0, -0.7)) * pose_.rotation[site.bone] * site.mount;
+    const Eigen::Matrix3d mount0 = site.mount * Exp(Eigen::Vector3d(0.1, -0.2, 0.05));
+    MountedOrientationResidual f(ScaledChain(&scene_.skeleton, site.bone, {}), mount0, measured,
+                                 100.0);
+    // The true mounting is mount0 Exp(m) with m = Log(mount0^T mount).
+    const Eigen::Vector3d m = Log(mount0.transpose() * site.mount);
+    CalibrationBlocks at{truth_, {{m.x(), m.y(), m.z()}, {0.7}}};
+    Eigen::Vector3d r;
+    ASSERT_TRUE(f.Evaluate(at.Pointers(scene_.skeleton, site.bone).data(), r.data(), nullptr));
+    EXPECT_LT(r.norm(), 1e-9);
+    CalibrationBlocks away{testing::Perturb(truth_, 0.2, 0.1, &rng_), {{0.1, 0.0, -0.1}, {0.3}}};
+    ExpectAllJacobiansCorrect(f, away.Pointers(scene_.skeleton, site.bone));
+    ASSERT_TRUE(f.Evaluate(away.Pointers(scene_.skeleton, site.bone).data(), r.data(), nullptr));
+    EXPECT_GT(r.norm(), 1.0);
   }
 }
 

@@ -1,0 +1,75 @@
+// Calibration over a window of frames: the subject's bone lengths, where each keypoint of
+// the detector sits on its bone, and each IMU's mounting and heading, solved jointly with
+// the poses of a few seconds of ordinary motion (a bundle adjustment of the body).
+//
+// Unknowns: theta_t per frame; s_u per length group and d_v per shift group (bone j's offset
+// becomes s_u t_j + D_j d_v: a group's lengths scale together, a shift group's offsets move
+// together, mirrored left/right; residuals/calibration_residuals.h); o_k per keypoint (its offset in
+// its bone's frame); per IMU a mounting M = M0 Exp(m) and a heading psi turning its
+// reference frame about world z, R_ig = Rz(psi) R_ig0.
+// Cost: the frames' E_P (keypoint reprojection, Cauchy, confidence-weighted), E_R with the
+// unknown mounting and heading, E_PP and E_PD per frame, and Gaussian priors holding each
+// site near the layout's (site_sigma), each scale near its start (scale_sigma) and each shift
+// near zero (shift_sigma).
+//
+// Why it is observable: the IMUs give each instrumented bone's orientation up to a constant
+// (mounting, heading) and video its position; as the bones turn, a keypoint's offset moves
+// its projection differently from a joint's, so offsets and lengths separate from poses.
+// What stays weak: a bone's twist about its own axis when no keypoint lies off the axis
+// (the prior decides), and the component of a site along a hinge axis.
+#ifndef MOCAP_WINDOW_CALIBRATION_H_
+#define MOCAP_WINDOW_CALIBRATION_H_
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "mocap/camera.h"
+#include "mocap/observations.h"
+#include "mocap/prior.h"
+#include "mocap/sites.h"
+#include "mocap/skeleton.h"
+#include "mocap/solver.h"
+
+namespace mocap {
+
+struct CalibrationOptions {
+  SolverOptions terms;           // E_R, E_P, E_PP, E_PD weights and losses; thresholds
+  std::vector<int> scale_group;  // per bone: its length group, -1 for none (may be empty)
+  std::vector<int> shift_group;  // per bone: its shift group, -1 for none (may be empty)
+  double scale_sigma = 0.05;     // prior on each group scale around its start (relative)
+  double shift_sigma = 0.05;     // m, prior on each group shift around zero
+  double site_sigma = 0.03;      // m, prior on each keypoint site around the layout's
+  bool estimate_scales = true, estimate_shifts = true, estimate_sites = true,
+       estimate_mounts = true, estimate_headings = true;
+  int max_iterations = 60;
+  int num_threads = 2;
+};
+
+struct CalibrationResult {
+  Skeleton skeleton;          // offsets scaled
+  KeypointLayout layout;      // sites estimated
+  std::vector<ImuSite> imus;  // mount and reference estimated (offset unchanged)
+  std::vector<double> scales;                  // per length group, relative to the given skeleton
+  std::vector<Eigen::Vector3d> shifts;         // per shift group, m (of its first bone)
+  std::vector<Eigen::VectorXd> thetas;         // the window's poses
+  std::vector<double> imu_residual_deg;        // median |E_R angle| per IMU (NaN: unseen)
+  std::vector<int> keypoint_observations;      // per keypoint: detections used
+  double initial_cost = 0, final_cost = 0;
+  int iterations = 0;
+  bool converged = false;
+  std::string message;  // Ceres' summary line
+};
+
+// frames: the window's observations; thetas: their starting poses (e.g. a video-only
+// solve). False with *error when inputs are inconsistent or nothing could be solved.
+bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLayout& layout,
+                     const std::vector<ImuSite>& imus, const std::optional<PosePrior>& prior,
+                     const std::vector<FrameObservations>& frames,
+                     const std::vector<Eigen::VectorXd>& thetas, const CalibrationOptions& options,
+                     CalibrationResult* result, std::string* error);
+
+}  // namespace mocap
+
+#endif  // MOCAP_WINDOW_CALIBRATION_H_

@@ -1,0 +1,179 @@
+"""Calibration without oracles from the first seconds of a take: the subject's skeleton and
+each IMU's mounting and heading, for the fused solve that follows.
+
+1. Bone lengths from triangulated keypoints (mocap.calibration.skeleton).
+2. A video-only solve of the window with that skeleton.
+3. Each IMU's heading and mounting against the video's bone orientations
+   (mocap.calibration.imus): a start, 7-30 degrees off because video sees limb twist poorly.
+4. The window calibration (host C++, window_calibration.h): the poses of every `step`-th
+   frame seen by two cameras or more, the bone offsets (LENGTH_GROUPS, SHIFT_GROUPS), the
+   mountings and the headings solved together (E_P, E_R with the unknown mountings and
+   headings, the PCA prior).
+5. Each IMU's position on its segment from its accelerometer (mocap.calibration.imu_position)
+   against a solve of the window with steps 1-4 (E_A off); when detections are sparse (HS)
+   the positions stay at the strap's usual place.
+
+What it reaches and what it does not (docs/calibration.md): the fused solve with this
+calibration lands between the video-only solve and the oracle calibration; the mountings are
+right in the directions video observes, while a bone's twist about its own axis and the
+pelvis' tilt are set by the pose prior, not by the data. Keypoint site offsets are held at the
+layout's: estimating them in the same window made the fused solve worse (the offsets trade
+with the mountings' unobserved twist), so `estimate_sites` stays off until that is pinned.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from mocap import _core, paths, prior, rotations
+from mocap.calibration import imu_position
+from mocap.calibration import imus as imu_calibration
+from mocap.calibration import skeleton as skeleton_estimate
+from mocap.solver import Solver
+
+SECONDS = 5.0  # the window: the take's first seconds
+STEP = 2  # every STEP-th frame of the window enters the joint solve
+SCALE_SIGMA = 0.25  # prior on the window's length scales around the first estimate (relative)
+SHIFT_SIGMA = 0.05  # m, prior on the window's shifts
+DENSE = 0.5  # IMU positions are estimated when at least this fraction of the window has detections
+
+
+@dataclasses.dataclass
+class ImuReadings:
+    """What the calibration needs of the IMUs: orientations at the video frames."""
+    names: list[str]
+    bones: list[int]  # skeleton bone index per sensor
+    quaternions: np.ndarray  # (F, M, 4) w, x, y, z: sensor -> the sensor's own reference (NaN: none)
+    accelerations: np.ndarray | None = None  # (F, M, 3) m/s^2, sensor frame, gravity's reaction (NaN: none)
+
+
+@dataclasses.dataclass
+class Calibration:
+    skeleton: _core.Skeleton
+    layout: _core.KeypointLayout
+    imus: list  # _core.ImuSite with the estimated mount, reference and offset
+    skeleton_start: skeleton_estimate.SkeletonEstimate  # step 1
+    report: dict
+    window_frames: np.ndarray  # (W,) the frames of the joint solve
+    window_thetas: np.ndarray  # (W, 66) their poses, with the estimated skeleton
+
+
+def _video_only(skeleton, rig, layout, detections, times) -> np.ndarray:
+    solver = Solver(skeleton, rig, layout, [])
+    out = []
+    for f in range(len(detections)):
+        cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
+        r = solver.solve(float(times[f]), cams, detections[f, cams], [], np.zeros((0, 4)), np.zeros((0, 3)))
+        out.append(np.array(r.theta))
+    return np.array(out)
+
+
+# The window's length groups (a scale of the offsets) and shift groups (a 3-D change of the
+# offsets, mirrored left/right). Limbs keep their direction and change length; where a joint
+# sits on the trunk differs between bodies and between skeleton conventions in all three
+# directions (the hips forward of the pelvis origin or level with it, the shoulders high or
+# low on the chest), which one scale cannot follow: the shoulder keypoints then miss by
+# centimetres and the arm lengths shrink to make up for it.
+LENGTH_GROUPS = {"thigh": ["shin_l", "shin_r"], "shin": ["foot_l", "foot_r"], "foot": ["toes_l", "toes_r"],
+                 "upper_arm": ["forearm_l", "forearm_r"], "forearm": ["hand_l", "hand_r"],
+                 "trunk": ["spine_lower", "spine_upper"], "shoulder_width": ["upper_arm_l", "upper_arm_r"],
+                 "head": ["head"]}
+SHIFT_GROUPS = {"hips": ["thigh_l", "thigh_r"], "clavicles": ["clavicle_l", "clavicle_r"], "neck": ["neck"]}
+
+
+def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> list[int]:
+    """Per bone: the index of its group in `groups`, -1 for none."""
+    out = [-1] * skeleton.num_bones
+    for g, bones in enumerate(groups.values()):
+        for b in bones:
+            out[skeleton.bone_names.index(b)] = g
+    return out
+
+
+def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
+             readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
+             estimate_sites: bool = False) -> Calibration:
+    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings."""
+    window = int(np.searchsorted(times, times[0] + seconds))
+    window = max(window, 1)
+    start = skeleton_estimate.estimate(rig, detections[:window], layout_name)
+    skel = start.skeleton
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{layout_name}.json"), skel).scaled_to(skel)
+    thetas = _video_only(skel, rig, layout, detections[:window], times[:window])
+    sites, first = [], []
+    bone_world = np.array([skel.forward_kinematics(t)[0] for t in thetas])
+    for i, name in enumerate(readings.names if readings else []):
+        q = readings.quaternions[:window, i]
+        seen = np.isfinite(q).all(axis=1)
+        site = _core.ImuSite()
+        site.name, site.bone = name, readings.bones[i]
+        if seen.sum() >= 10:
+            c = imu_calibration.calibrate(name, skel.bone_names[site.bone], bone_world[seen, site.bone],
+                                          rotations.matrix_from_quaternion(q[seen]))
+            site.mount, site.reference = c.mount, rotations.exp(np.array([0.0, 0.0, c.heading_rad]))
+            first.append(c.residual_deg)
+        else:
+            first.append(float("nan"))
+        sites.append(site)
+    frames, starts, used = [], [], []
+    seen_by = (detections[:window, :, :, 2] > 0).any(axis=2).sum(axis=1)  # cameras per frame
+    for f in np.flatnonzero(seen_by >= 2)[::step]:  # frames between detections add nothing
+        cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
+        n = len(sites)
+        q = readings.quaternions[f] if readings else np.zeros((0, 4))
+        frames.append((float(times[f]), cams, detections[f, cams], list(range(n)), q, np.full((n, 3), np.nan)))
+        starts.append(thetas[f])
+        used.append(f)
+    options = _core.CalibrationOptions()
+    options.scale_group = group_indices(skel, LENGTH_GROUPS)
+    options.shift_group = group_indices(skel, SHIFT_GROUPS)
+    options.estimate_sites = estimate_sites
+    options.scale_sigma, options.shift_sigma = SCALE_SIGMA, SHIFT_SIGMA
+    result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
+    report = {
+        "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
+        "iterations": result.iterations, "converged": result.converged,
+        "cost": {"start": result.initial_cost, "end": result.final_cost},
+        "scales_start": start.scales,  # step 1, of the default skeleton's groups
+        "scales_window": dict(zip(LENGTH_GROUPS, (float(s) for s in result.scales))),  # step 4, of step 1's
+        "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
+        "sites_estimated": estimate_sites,
+        "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
+                          "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
+                          "mount": rotations.log(np.asarray(s.mount)).tolist()}
+                 for s, r0, r in zip(result.imus, first, result.imu_residual_deg)}}
+    imus = list(result.imus)
+    dense = len(used) * step >= DENSE * window
+    report["imu_positions"] = _place_imus(result.skeleton, rig, result.layout, imus, detections[:window],
+                                          times[:window], readings, dense)
+    return Calibration(result.skeleton, result.layout, imus, start, report, np.array(used), np.array(result.thetas))
+
+
+def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuReadings | None,
+                dense: bool) -> dict:
+    """Step 5: sets each site's offset; returns what was done, per sensor."""
+    for s in imus:
+        s.offset = imu_position.usual_place(skel, s.bone)
+    if not imus or readings is None or readings.accelerations is None or not dense:
+        why = "no accelerations" if readings is None or readings.accelerations is None else "detections too sparse"
+        return {s.name: {"offset_m": np.asarray(s.offset).tolist(), "estimated": False, "why": why} for s in imus}
+    options = _core.SolverOptions()
+    options.acceleration.enabled = False
+    solver = Solver(skel, rig, layout, imus, options=options)
+    n = len(imus)
+    thetas = []
+    for f in range(len(detections)):
+        cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
+        r = solver.solve(float(times[f]), cams, detections[f, cams], list(range(n)), readings.quaternions[f],
+                         np.full((n, 3), np.nan))
+        thetas.append(np.array(r.theta))
+    out = {}
+    for i, s in enumerate(imus):
+        placed = imu_position.estimate(skel, s, np.array(thetas), times, readings.quaternions[: len(times), i],
+                                       readings.accelerations[: len(times), i])
+        s.offset = placed.offset
+        out[s.name] = {"offset_m": placed.offset.tolist(), "estimated": placed.frames > 0, "frames": placed.frames,
+                       "residual_ms2": placed.residual_ms2}
+    return out

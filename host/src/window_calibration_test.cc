@@ -1,0 +1,154 @@
+// The window calibration on exact observations of random poses: the bone lengths, the IMU
+// headings and the directions video observes of each mounting come back from wrong starts;
+// the directions it does not observe (a bone's twist about its own axis when the joint below
+// is free) are not asserted. Inconsistent inputs are refused with a message.
+#include "mocap/window_calibration.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "mocap/kinematics.h"
+#include "mocap/so3.h"
+#include "synthetic_scene.h"
+
+namespace mocap {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+class WindowCalibrationTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    told_ = testing::MakeScene(8);
+    // The true body: legs 6% longer, arms 5% shorter than the skeleton the calibration starts from.
+    truth_ = told_;
+    group_.assign(told_.skeleton.num_bones(), -1);
+    std::vector<Skeleton::Bone> bones = told_.skeleton.bones();
+    const std::vector<std::pair<std::string, double>> scaled = {
+        {"shin_l", 1.06}, {"shin_r", 1.06}, {"foot_l", 1.06}, {"foot_r", 1.06},
+        {"forearm_l", 0.95}, {"forearm_r", 0.95}, {"hand_l", 0.95}, {"hand_r", 0.95}};
+    for (const auto& [name, s] : scaled) {
+      const int b = told_.skeleton.BoneIndex(name);
+      bones[b].offset *= s;
+      group_[b] = s > 1.0 ? 0 : 1;
+    }
+    std::string error;
+    ASSERT_TRUE(Skeleton::Create(bones, &truth_.skeleton, &error)) << error;
+    for (int t = 0; t < 30; ++t) {
+      thetas_.push_back(testing::RandomPose(truth_.skeleton, &rng_));
+      frames_.push_back(testing::Render(truth_, thetas_.back(), 0.1 * t));
+      starts_.push_back(testing::Perturb(thetas_.back(), 0.1, 0.03, &rng_));
+    }
+    // Mountings 10 degrees off, headings 20 degrees off.
+    for (ImuSite& s : told_.imus) {
+      Eigen::Vector3d axis = Eigen::Vector3d::Random().normalized();
+      s.mount = s.mount * Exp(10 * kDeg * axis);
+      s.reference = Exp(Eigen::Vector3d(0, 0, 20 * kDeg)) * s.reference;
+    }
+    options_.scale_group = group_;
+    options_.estimate_sites = false;
+    options_.max_iterations = 100;
+    options_.scale_sigma = 1e3;  // exact data: the prior on the lengths should not pull
+  }
+
+  std::mt19937 rng_{7};
+  testing::Scene told_, truth_;
+  std::vector<int> group_;
+  std::vector<Eigen::VectorXd> thetas_, starts_;
+  std::vector<FrameObservations> frames_;
+  CalibrationOptions options_;
+};
+
+// The bone's axis (towards its first child) in the sensor frame: what video observes of M.
+Eigen::Vector3d AxisInSensor(const Skeleton& s, const ImuSite& imu) {
+  for (int c = 0; c < s.num_bones(); ++c) {
+    if (s.bone(c).parent == imu.bone)
+      return imu.mount.transpose() * s.bone(c).offset.normalized();
+  }
+  return imu.mount.transpose() * Eigen::Vector3d::UnitZ();
+}
+
+TEST_F(WindowCalibrationTest, RecoversLengthsHeadingsAndObservedMountings) {
+  CalibrationResult r;
+  std::string error;
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &r, &error))
+      << error;
+  EXPECT_LT(r.final_cost, 1e-6 * r.initial_cost) << r.message;
+  ASSERT_EQ(r.scales.size(), 2u);
+  EXPECT_NEAR(r.scales[0], 1.06, 1e-4);
+  EXPECT_NEAR(r.scales[1], 0.95, 1e-4);
+  for (int b = 0; b < truth_.skeleton.num_bones(); ++b)
+    EXPECT_LT((r.skeleton.bone(b).offset - truth_.skeleton.bone(b).offset).norm(), 1e-4);
+  for (size_t i = 0; i < truth_.imus.size(); ++i) {
+    const ImuSite &got = r.imus[i], &want = truth_.imus[i];
+    EXPECT_LT(AngleBetween(got.reference, want.reference), 0.05 * kDeg) << want.name;
+    const double axis_angle = std::acos(std::min(
+        1.0, AxisInSensor(truth_.skeleton, got).dot(AxisInSensor(truth_.skeleton, want))));
+    EXPECT_LT(axis_angle, 0.05 * kDeg) << want.name;
+    EXPECT_LT(r.imu_residual_deg[i], 0.01) << want.name;
+  }
+  // The head is seen whole (eleven keypoints around it): its mounting comes back entirely.
+  const int head = truth_.skeleton.BoneIndex("head");
+  for (size_t i = 0; i < truth_.imus.size(); ++i) {
+    if (truth_.imus[i].bone == head)
+      EXPECT_LT(AngleBetween(r.imus[i].mount, truth_.imus[i].mount), 0.05 * kDeg);
+  }
+  for (size_t t = 0; t < thetas_.size(); ++t)
+    EXPECT_LT(testing::MaxSiteError(truth_, r.thetas[t], thetas_[t]), 1e-4);
+}
+
+TEST_F(WindowCalibrationTest, HeldParametersStayWhereTheyStart) {
+  options_.estimate_headings = false;
+  options_.estimate_scales = false;
+  CalibrationResult r;
+  std::string error;
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &r, &error))
+      << error;
+  EXPECT_EQ(r.scales, std::vector<double>({1.0, 1.0}));
+  for (size_t i = 0; i < told_.imus.size(); ++i)
+    EXPECT_LT(AngleBetween(r.imus[i].reference, told_.imus[i].reference), 1e-12);
+  // With the wrong headings and lengths held, the data cannot be met.
+  EXPECT_GT(r.final_cost, 1.0);
+}
+
+TEST_F(WindowCalibrationTest, InconsistentInputsAreRefused) {
+  CalibrationResult r;
+  std::string error;
+  std::vector<Eigen::VectorXd> fewer(starts_.begin(), starts_.end() - 1);
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               frames_, fewer, options_, &r, &error));
+  EXPECT_NE(error.find("one starting pose per frame"), std::string::npos) << error;
+  std::vector<Eigen::VectorXd> bad = starts_;
+  bad[3](10) = NAN;
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               frames_, bad, options_, &r, &error));
+  EXPECT_NE(error.find("starting pose 3"), std::string::npos) << error;
+  options_.scale_group.pop_back();
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               frames_, starts_, options_, &r, &error));
+  EXPECT_NE(error.find("scale_group"), std::string::npos) << error;
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               {}, {}, CalibrationOptions(), &r, &error));
+  EXPECT_NE(error.find("no frames"), std::string::npos) << error;
+}
+
+TEST_F(WindowCalibrationTest, MalformedObservationsAreDroppedNotFatal) {
+  // NaN keypoints and a non-unit quaternion in a few frames: counted out, the rest calibrates.
+  for (int t = 0; t < 5; ++t) {
+    frames_[t].cameras[0].keypoints[3].x = NAN;
+    frames_[t].imus[0].orientation.coeffs() *= 3.0;
+  }
+  CalibrationResult r;
+  std::string error;
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &r, &error))
+      << error;
+  EXPECT_NEAR(r.scales[0], 1.06, 1e-4);
+  EXPECT_LT(AngleBetween(r.imus[0].reference, truth_.imus[0].reference), 0.05 * kDeg);
+}
+
+}  // namespace
+}  // namespace mocap
