@@ -423,6 +423,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("shift_group", &CalibrationOptions::shift_group)
       .def_readwrite("scale_sigma", &CalibrationOptions::scale_sigma)
       .def_readwrite("shift_sigma", &CalibrationOptions::shift_sigma)
+      .def_readwrite("shift_sigmas", &CalibrationOptions::shift_sigmas)
       .def_readwrite("estimate_shifts", &CalibrationOptions::estimate_shifts)
       .def_readwrite("site_sigma", &CalibrationOptions::site_sigma)
       .def_readwrite("estimate_scales", &CalibrationOptions::estimate_scales)
@@ -448,14 +449,17 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "calibrate_window",
       [](const Skeleton& s, const Rig& r, const KeypointLayout& l, const std::vector<ImuSite>& i,
-         std::optional<PosePrior> p, const py::list& frames, const std::vector<Eigen::VectorXd>& thetas,
-         const CalibrationOptions& o) {
+         std::optional<PosePrior> p, const py::list& frames,
+         const std::vector<Eigen::VectorXd>& thetas, const CalibrationOptions& o) {
         std::vector<FrameObservations> obs;
         for (const py::handle& f : frames) {
           const auto t = f.cast<py::tuple>();
-          if (t.size() != 6) throw std::invalid_argument("a frame is (time, cameras, keypoints, imus, quaternions, accelerations)");
-          obs.push_back(MakeFrame(t[0].cast<double>(), t[1].cast<std::vector<int>>(), t[2].cast<Array>(),
-                                  t[3].cast<std::vector<int>>(), t[4].cast<Array>(), t[5].cast<Array>()));
+          if (t.size() != 6)
+            throw std::invalid_argument(
+                "a frame is (time, cameras, keypoints, imus, quaternions, accelerations)");
+          obs.push_back(MakeFrame(t[0].cast<double>(), t[1].cast<std::vector<int>>(),
+                                  t[2].cast<Array>(), t[3].cast<std::vector<int>>(),
+                                  t[4].cast<Array>(), t[5].cast<Array>()));
         }
         CalibrationResult result;
         std::string e;

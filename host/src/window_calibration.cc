@@ -40,15 +40,19 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>&
   if (!(options.scale_sigma > 0) || !(options.shift_sigma > 0) || !(options.site_sigma > 0) ||
       options.max_iterations < 1)
     return Fail(error, "the priors' sigmas must be positive, max_iterations at least 1");
+  for (const Eigen::Vector3d& sigma : options.shift_sigmas) {
+    if (!(sigma.array() > 0).all() || !sigma.allFinite())
+      return Fail(error, "shift_sigmas must be positive");
+  }
   if (prior && prior->dof() != skeleton.pose_dim() - 6)
     return Fail(error, "the prior's dimension does not match the skeleton");
   return options.terms.IsValid(error);
 }
 
-// A fixed Gaussian prior |(x - mean) / sigma|^2 on a block of `size`.
-ceres::CostFunction* GaussianPrior(const double* mean, int size, double sigma) {
-  ceres::Matrix a = ceres::Matrix::Identity(size, size) / sigma;
-  return new ceres::NormalPrior(a, Eigen::Map<const ceres::Vector>(mean, size));
+// A fixed Gaussian prior sum_i ((x_i - mean_i) / sigma_i)^2 on a block.
+ceres::CostFunction* GaussianPrior(const double* mean, const Eigen::VectorXd& sigma) {
+  ceres::Matrix a = sigma.cwiseInverse().asDiagonal();
+  return new ceres::NormalPrior(a, Eigen::Map<const ceres::Vector>(mean, sigma.size()));
 }
 
 int NumGroups(const std::vector<int>& group) {
@@ -145,21 +149,26 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
 
   for (int k = 0; k < layout.size(); ++k) {
     if (!problem.HasParameterBlock(sites[k].data())) continue;
-    costs.emplace_back(GaussianPrior(sites0[k].data(), 3, options.site_sigma));
+    costs.emplace_back(
+        GaussianPrior(sites0[k].data(), Eigen::Vector3d::Constant(options.site_sigma)));
     problem.AddResidualBlock(costs.back().get(), nullptr, sites[k].data());
     if (!options.estimate_sites) problem.SetParameterBlockConstant(sites[k].data());
   }
   const double one = 1.0;
   for (double& s : scales) {
     if (!problem.HasParameterBlock(&s)) continue;
-    costs.emplace_back(GaussianPrior(&one, 1, options.scale_sigma));
+    costs.emplace_back(GaussianPrior(&one, Eigen::VectorXd::Constant(1, options.scale_sigma)));
     problem.AddResidualBlock(costs.back().get(), nullptr, &s);
     if (!options.estimate_scales) problem.SetParameterBlockConstant(&s);
   }
   const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  for (Eigen::Vector3d& d : shifts) {
+  for (size_t v = 0; v < shifts.size(); ++v) {
+    Eigen::Vector3d& d = shifts[v];
     if (!problem.HasParameterBlock(d.data())) continue;
-    costs.emplace_back(GaussianPrior(zero.data(), 3, options.shift_sigma));
+    const Eigen::Vector3d sigma = v < options.shift_sigmas.size()
+                                      ? options.shift_sigmas[v]
+                                      : Eigen::Vector3d::Constant(options.shift_sigma);
+    costs.emplace_back(GaussianPrior(zero.data(), sigma));
     problem.AddResidualBlock(costs.back().get(), nullptr, d.data());
     if (!options.estimate_shifts) problem.SetParameterBlockConstant(d.data());
   }

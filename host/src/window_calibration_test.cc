@@ -26,7 +26,7 @@ class WindowCalibrationTest : public ::testing::Test {
     group_.assign(told_.skeleton.num_bones(), -1);
     std::vector<Skeleton::Bone> bones = told_.skeleton.bones();
     const std::vector<std::pair<std::string, double>> scaled = {
-        {"shin_l", 1.06}, {"shin_r", 1.06}, {"foot_l", 1.06}, {"foot_r", 1.06},
+        {"shin_l", 1.06},    {"shin_r", 1.06},    {"foot_l", 1.06}, {"foot_r", 1.06},
         {"forearm_l", 0.95}, {"forearm_r", 0.95}, {"hand_l", 0.95}, {"hand_r", 0.95}};
     for (const auto& [name, s] : scaled) {
       const int b = told_.skeleton.BoneIndex(name);
@@ -63,8 +63,7 @@ class WindowCalibrationTest : public ::testing::Test {
 // The bone's axis (towards its first child) in the sensor frame: what video observes of M.
 Eigen::Vector3d AxisInSensor(const Skeleton& s, const ImuSite& imu) {
   for (int c = 0; c < s.num_bones(); ++c) {
-    if (s.bone(c).parent == imu.bone)
-      return imu.mount.transpose() * s.bone(c).offset.normalized();
+    if (s.bone(c).parent == imu.bone) return imu.mount.transpose() * s.bone(c).offset.normalized();
   }
   return imu.mount.transpose() * Eigen::Vector3d::UnitZ();
 }
@@ -84,8 +83,8 @@ TEST_F(WindowCalibrationTest, RecoversLengthsHeadingsAndObservedMountings) {
   for (size_t i = 0; i < truth_.imus.size(); ++i) {
     const ImuSite &got = r.imus[i], &want = truth_.imus[i];
     EXPECT_LT(AngleBetween(got.reference, want.reference), 0.05 * kDeg) << want.name;
-    const double axis_angle = std::acos(std::min(
-        1.0, AxisInSensor(truth_.skeleton, got).dot(AxisInSensor(truth_.skeleton, want))));
+    const double axis_angle = std::acos(
+        std::min(1.0, AxisInSensor(truth_.skeleton, got).dot(AxisInSensor(truth_.skeleton, want))));
     EXPECT_LT(axis_angle, 0.05 * kDeg) << want.name;
     EXPECT_LT(r.imu_residual_deg[i], 0.01) << want.name;
   }

@@ -4,13 +4,12 @@
 //
 // Unknowns: theta_t per frame; s_u per length group and d_v per shift group (bone j's offset
 // becomes s_u t_j + D_j d_v: a group's lengths scale together, a shift group's offsets move
-// together, mirrored left/right; residuals/calibration_residuals.h); o_k per keypoint (its offset in
-// its bone's frame); per IMU a mounting M = M0 Exp(m) and a heading psi turning its
-// reference frame about world z, R_ig = Rz(psi) R_ig0.
-// Cost: the frames' E_P (keypoint reprojection, Cauchy, confidence-weighted), E_R with the
-// unknown mounting and heading, E_PP and E_PD per frame, and Gaussian priors holding each
-// site near the layout's (site_sigma), each scale near its start (scale_sigma) and each shift
-// near zero (shift_sigma).
+// together, mirrored left/right; residuals/calibration_residuals.h); o_k per keypoint (its offset
+// in its bone's frame); per IMU a mounting M = M0 Exp(m) and a heading psi turning its reference
+// frame about world z, R_ig = Rz(psi) R_ig0. Cost: the frames' E_P (keypoint reprojection, Cauchy,
+// confidence-weighted), E_R with the unknown mounting and heading, E_PP and E_PD per frame, and
+// Gaussian priors holding each site near the layout's (site_sigma), each scale near its start
+// (scale_sigma) and each shift near zero (shift_sigma).
 //
 // Why it is observable: the IMUs give each instrumented bone's orientation up to a constant
 // (mounting, heading) and video its position; as the bones turn, a keypoint's offset moves
@@ -40,7 +39,11 @@ struct CalibrationOptions {
   std::vector<int> shift_group;  // per bone: its shift group, -1 for none (may be empty)
   double scale_sigma = 0.05;     // prior on each group scale around its start (relative)
   double shift_sigma = 0.05;     // m, prior on each group shift around zero
-  double site_sigma = 0.03;      // m, prior on each keypoint site around the layout's
+  // Per shift group, per axis (of its first bone's parent frame), overriding shift_sigma: a
+  // tiny sigma holds an axis that trades with another parameter (a gauge), e.g. the hips'
+  // height against the spine's length when no keypoint marks the pelvis origin.
+  std::vector<Eigen::Vector3d> shift_sigmas;
+  double site_sigma = 0.03;  // m, prior on each keypoint site around the layout's
   bool estimate_scales = true, estimate_shifts = true, estimate_sites = true,
        estimate_mounts = true, estimate_headings = true;
   int max_iterations = 60;
@@ -48,14 +51,14 @@ struct CalibrationOptions {
 };
 
 struct CalibrationResult {
-  Skeleton skeleton;          // offsets scaled
-  KeypointLayout layout;      // sites estimated
-  std::vector<ImuSite> imus;  // mount and reference estimated (offset unchanged)
-  std::vector<double> scales;                  // per length group, relative to the given skeleton
-  std::vector<Eigen::Vector3d> shifts;         // per shift group, m (of its first bone)
-  std::vector<Eigen::VectorXd> thetas;         // the window's poses
-  std::vector<double> imu_residual_deg;        // median |E_R angle| per IMU (NaN: unseen)
-  std::vector<int> keypoint_observations;      // per keypoint: detections used
+  Skeleton skeleton;                       // offsets scaled
+  KeypointLayout layout;                   // sites estimated
+  std::vector<ImuSite> imus;               // mount and reference estimated (offset unchanged)
+  std::vector<double> scales;              // per length group, relative to the given skeleton
+  std::vector<Eigen::Vector3d> shifts;     // per shift group, m (of its first bone)
+  std::vector<Eigen::VectorXd> thetas;     // the window's poses
+  std::vector<double> imu_residual_deg;    // median |E_R angle| per IMU (NaN: unseen)
+  std::vector<int> keypoint_observations;  // per keypoint: detections used
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;
   bool converged = false;

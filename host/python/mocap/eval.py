@@ -155,7 +155,39 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
                    "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
     if estimated:
         result["calibration_report"] = estimated.report
+        result["calibration_errors"] = calibration_errors(t, estimated)
     return result
+
+
+LIMB_BONES = ["shin_l", "shin_r", "foot_l", "foot_r", "forearm_l", "forearm_r", "hand_l", "hand_r"]  # their lengths
+
+
+def _bone_axis(skeleton: _core.Skeleton, bone: int) -> np.ndarray:
+    """Unit direction to the bone's first child away from its origin (bone frame); z for none."""
+    offsets = np.asarray(skeleton.offsets)
+    child = next((c for c, p in enumerate(skeleton.parents) if p == bone and np.linalg.norm(offsets[c]) > 1e-6), None)
+    axis = offsets[child] if child is not None else np.array([0.0, 0.0, 1.0])
+    return axis / np.linalg.norm(axis)
+
+
+def calibration_errors(t: sim_take.Take, c: window.Calibration) -> dict:
+    """Estimated against true, per IMU: heading (deg), mounting (deg; in full, and the bone
+    axis' direction in the sensor frame: what video observes of it), position (cm); the limb
+    lengths (cm)."""
+    out = {}
+    for est, true in zip(c.imus, t.imus):
+        turn = np.asarray(est.reference) @ np.asarray(true.reference).T
+        axis = _bone_axis(t.skeleton, true.bone)
+        along = np.clip(np.dot(np.asarray(est.mount).T @ axis, np.asarray(true.mount).T @ axis), -1.0, 1.0)
+        out[true.name] = {"heading_deg": float(np.degrees(abs(np.arctan2(turn[1, 0], turn[0, 0])))),
+                          "mount_deg": float(np.degrees(rotations.angle_between(np.asarray(est.mount),
+                                                                                 np.asarray(true.mount)))),
+                          "mount_axis_deg": float(np.degrees(np.arccos(along))),
+                          "offset_cm": 100 * float(np.linalg.norm(np.asarray(est.offset) - np.asarray(true.offset)))}
+    names = t.skeleton.bone_names
+    lengths = {b: 100 * float(np.linalg.norm(c.skeleton.offsets[names.index(b)]) -
+                              np.linalg.norm(t.skeleton.offsets[names.index(b)])) for b in LIMB_BONES}
+    return {"imus": out, "limb_length_cm": lengths}
 
 
 def summarise(results: list[dict]) -> dict:

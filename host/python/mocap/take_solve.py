@@ -1,14 +1,14 @@
 """`mocap solve --take DIR --out OUTDIR`: a take folder (docs/take_format.md) solved
-without oracles. Done so far: the subject chosen per camera and frame, its skeleton
-estimated from the first seconds (mocap.calibration.skeleton), a video-only solve of every
-frame (E_P and the prior). Not yet: the IMUs' mounting, heading and position (issue 6), so a
-take's IMU files are read and checked but not used — the report says so.
+without oracles: the subject chosen per camera and frame, the calibration estimated from
+the take's first seconds (mocap.calibration.window: skeleton, IMU mountings, headings and
+positions), then every frame solved with the IMUs (E_R, E_P, E_A and the prior), or video
+only when the take has no IMUs.
 
 Writes OUTDIR/joints.csv (frame, time_s, then <joint>_x, _y, _z in metres in the take's
-world frame: joint centres of the solved skeleton), OUTDIR/take.bvh and
+world frame: joint centres of the solved skeleton), OUTDIR/take.bvh, OUTDIR/skeleton.json and
+OUTDIR/imus.json (the estimated skeleton and IMU sites in the solver's formats) and
 OUTDIR/calibration.json + calibration.md (what was estimated, from how many frames).
 """
-
 from __future__ import annotations
 
 import csv
@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths
-from mocap.calibration import skeleton as skeleton_estimate
+from mocap import _core, paths, rotations
+from mocap.calibration import imus as imu_calibration
+from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
 from mocap.joint_centres import JOINTS, bone_indices
@@ -26,7 +27,6 @@ from mocap.solver import Solver
 from mocap.take_folder import TakeFolder, read_take
 from mocap_edge.detect.openpose_json import box_size
 
-SKELETON_SECONDS = 5.0  # the first seconds the skeleton is estimated from
 
 
 
@@ -52,36 +52,67 @@ def subject(take: TakeFolder) -> np.ndarray:
     return out
 
 
+def imu_readings(take: TakeFolder, times: np.ndarray) -> window.ImuReadings | None:
+    """The take's IMU readings at the video frames' times: orientations slerped, accelerations
+    interpolated, NaN before a sensor's first sample and after its last."""
+    if not take.imus:
+        return None
+    quats = np.full((len(times), len(take.imus), 4), np.nan)
+    accs = np.full((len(times), len(take.imus), 3), np.nan)
+    for i, imu in enumerate(take.imus):
+        inside = (times >= imu.times_s[0]) & (times <= imu.times_s[-1])
+        r = imu_calibration.at_times(times[inside], imu.times_s, imu.quaternions)
+        quats[inside, i] = rotations.quaternion_from_matrix(r)
+        accs[inside, i] = np.stack([np.interp(times[inside], imu.times_s, imu.accelerations[:, k])
+                                    for k in range(3)], axis=1)
+    return window.ImuReadings([m.sensor for m in take.imus], [], quats, accs)
+
+
 def solve_take(folder: Path, out: Path) -> dict:
     take = read_take(folder)
     if take.rig is None:
-        raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration (not yet)")
+        raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
     det = subject(take)
-    first = det[: max(1, int(SKELETON_SECONDS * take.frame_rate))]
-    estimate = skeleton_estimate.estimate(take.rig, first, take.layout)
-    skel = estimate.skeleton
-    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{take.layout}.json"), skel).scaled_to(skel)
-    solver = Solver(skel, take.rig, layout, [])
+    times = np.arange(take.n_frames) / take.frame_rate
+    readings = imu_readings(take, times)
+    base = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    if readings is not None:
+        readings.bones = [base.bone_names.index(m.bone) for m in take.imus]
+    cal = window.estimate(take.rig, det, times, take.layout, readings)
+    solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus)
+    n = len(cal.imus)
     thetas, statuses = [], []
     for f in range(take.n_frames):
         cams = [c for c in range(det.shape[1]) if (det[f, c, :, 2] > 0).any()]
-        r = solver.solve(f / take.frame_rate, cams, det[f, cams], [], np.zeros((0, 4)), np.zeros((0, 3)))
+        q = readings.quaternions[f] if readings else np.zeros((0, 4))
+        a = readings.accelerations[f] if readings else np.zeros((0, 3))
+        r = solver.solve(float(times[f]), cams, det[f, cams], list(range(n)), q, a)
         thetas.append(np.array(r.theta))
         statuses.append(str(r.status))
     thetas = np.array(thetas)
     out.mkdir(parents=True, exist_ok=True)
-    _write_joints(out / "joints.csv", skel, thetas, take)
-    write_bvh(out / "take.bvh", skel, thetas, take.frame_rate)
+    _write_joints(out / "joints.csv", cal.skeleton, thetas, take)
+    write_bvh(out / "take.bvh", cal.skeleton, thetas, take.frame_rate)
+    start = cal.skeleton_start
     report = {"frames": take.n_frames, "frame_rate": take.frame_rate, "cameras": len(take.rig.cameras),
-              "layout": take.layout, "skeleton": {"from_frames": len(first), "scales": estimate.scales,
-                                                  "lengths_m": estimate.lengths_m, "frames_per_length": estimate.frames},
-              "imus": {"sensors": [i.sensor for i in take.imus],
-                       "used": False, "why": "IMU mounting, heading and position are not estimated yet (issue 6)"},
-              "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)}}}
+              "layout": take.layout, "imus_used": n,
+              "skeleton": {"from_frames": int(np.searchsorted(times, window.SECONDS)), "scales": start.scales,
+                           "lengths_m": start.lengths_m, "frames_per_length": start.frames},
+              "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)}}}
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
-    (out / "skeleton.json").write_text(skel.to_json())
+    (out / "skeleton.json").write_text(cal.skeleton.to_json())
+    (out / "imus.json").write_text(json.dumps(imu_sites_json(cal), indent=1))
     (out / "calibration.md").write_text(_markdown(report))
     return report
+
+
+def imu_sites_json(cal: window.Calibration) -> dict:
+    """The estimated IMU sites in the solver's IMU set format (mocap.imus/1, sites.h)."""
+    names = cal.skeleton.bone_names
+    return {"format": "mocap.imus/1",
+            "imus": [{"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
+                      "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
+                     for s in cal.imus]}
 
 
 def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: TakeFolder) -> None:
@@ -97,13 +128,28 @@ def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: Ta
 
 
 def _markdown(r: dict) -> str:
+    w = r["window"]
     rows = "\n".join(f"| {g} | {s:.3f} | {100 * r['skeleton']['lengths_m'][g]:.1f} cm | {r['skeleton']['frames_per_length'][g]} |"
                      if g in r["skeleton"]["lengths_m"] else f"| {g} | {s:.3f} | (overall scale) | 0 |"
                      for g, s in r["skeleton"]["scales"].items())
-    return "\n".join([
+    refined = ", ".join(f"{g} x{s:.3f}" for g, s in w["scales_window"].items())
+    shifts = ", ".join(f"{g} ({', '.join(f'{100 * v:+.1f}' for v in d)}) cm" for g, d in w["shifts_window_m"].items())
+    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {i['first_residual_deg']:.1f} | "
+                      f"{i['residual_deg']:.2f} | {', '.join(f'{100 * v:.1f}' for v in w['imu_positions'][name]['offset_m'])} | "
+                      f"{'estimated' if w['imu_positions'][name]['estimated'] else 'usual place'} |"
+                      for name, i in w["imus"].items())
+    lines = [
         "# Calibration report", "",
-        f"Skeleton: estimated from the first {r['skeleton']['from_frames']} frames (triangulated keypoints,",
+        f"Skeleton, first estimate: the first {r['skeleton']['from_frames']} frames (triangulated keypoints,",
         "median distances, left and right pooled), as scales of the default skeleton's bone groups:", "",
         "| group | scale | measured | distances |", "|---|---|---|---|", rows, "",
-        f"IMUs: {', '.join(r['imus']['sensors']) or 'none'} — not used: {r['imus']['why']}.", "",
-        f"Solve: {r['frames']} frames, video only; statuses {r['solve']['statuses']}.", ""])
+        f"Window calibration ({w['frames']} frames of the first {w['window_s']:.1f} s, {w['iterations']} iterations, "
+        f"cost {w['cost']['start']:.0f} -> {w['cost']['end']:.0f}):",
+        f"lengths {refined}; shifts {shifts}. Keypoint sites: {'estimated' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}.", ""]
+    if w["imus"]:
+        lines += ["| sensor | bone | heading (deg) | start residual (deg) | residual (deg) | offset (cm) | position |",
+                  "|---|---|---|---|---|---|---|", imus, ""]
+    else:
+        lines += ["No IMUs: a video-only solve.", ""]
+    lines += [f"Solve: {r['frames']} frames, {r['imus_used']} IMUs; statuses {r['solve']['statuses']}.", ""]
+    return "\n".join(lines)

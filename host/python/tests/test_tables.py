@@ -10,7 +10,8 @@ def test_tables_on_a_short_clip(shared, tmp_path, monkeypatch):
     monkeypatch.setattr(tables, "TUNING", tables.TUNING[:2])
     r = tables.write(0, tmp_path, "mocap eval --table paper --seed 0")
     text = (tmp_path / "results.md").read_text()
-    for heading in ("Input configurations", "Omitting terms", "Number of cameras", "Detection subsampling", "Tuning"):
+    for heading in ("Input configurations", "Omitting terms", "Number of cameras", "Detection subsampling", "Tuning",
+                    "Estimated calibration"):
         assert heading in text
     assert (tmp_path / "results" / "per_joint.png").stat().st_size > 10_000
     # The paper's main ablation direction: without the position term the root runs away.

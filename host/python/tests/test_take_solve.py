@@ -1,14 +1,18 @@
-"""`mocap solve --take`: a take folder solved without oracles (the skeleton estimated, the
-IMUs not yet used), on a simulated take and on Pose2Sim's real Balancing trial."""
+"""`mocap solve --take`: a take folder solved without oracles (skeleton, IMU mountings,
+headings and positions estimated from its first seconds), on a simulated take, the same take
+without its IMUs, and Pose2Sim's real Balancing trial (video only)."""
 
 import csv
+import json
+import shutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from mocap import _core, balancing_take, take_solve
+from mocap import _core, balancing_take, rotations, take_solve
+from mocap.joint_centres import JOINTS
 from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
 from mocap.sim import take_out
 
@@ -21,28 +25,72 @@ def simulated(tmp_path_factory):
     return folder, out, take_solve.solve_take(folder, out)
 
 
-def test_the_estimated_skeleton_is_near_the_true_one(simulated):
-    folder, out, report = simulated
-    truth = _core.Skeleton.load(str(folder / "truth_skeleton.json"))
-    estimated = _core.Skeleton.load(str(out / "skeleton.json"))
-    error = np.abs(np.linalg.norm(estimated.offsets, axis=1) - np.linalg.norm(truth.offsets, axis=1))
-    # Measured max 2.0 cm (hand), mean 0.8 cm: the simulated detector's 1-3 cm keypoint
-    # offsets are not estimated yet, so the issue's 1 cm is not reached.
-    assert error.max() < 0.025 and error.mean() < 0.012, dict(zip(truth.bone_names, error.round(3)))
-    assert report["imus"]["used"] is False and len(report["imus"]["sensors"]) == 13
+@pytest.fixture(scope="module")
+def video_only(simulated, tmp_path_factory):
+    """The same take with its [imu] table removed."""
+    folder = tmp_path_factory.mktemp("take_video") / "take"
+    shutil.copytree(simulated[0], folder)
+    toml = (folder / "take.toml").read_text()
+    (folder / "take.toml").write_text(toml[: toml.index("[imu]")])
+    out = tmp_path_factory.mktemp("solved_video")
+    return folder, out, take_solve.solve_take(folder, out)
 
 
-def test_joint_centres_of_the_video_only_solve_follow_the_truth(simulated):
-    folder, out, _ = simulated
+def joint_centre_errors(folder, out) -> np.ndarray:
+    """(F, 13) m: joints.csv against the true joint centres."""
     truth = _core.Skeleton.load(str(folder / "truth_skeleton.json"))
     thetas = np.load(folder / "truth_thetas.npy")
     rows = list(csv.reader(open(out / "joints.csv")))
     assert rows[0][:2] == ["frame", "time_s"] and len(rows) == len(thetas) + 1
     solved = np.array([[float(v) for v in r[2:]] for r in rows[1:]]).reshape(len(thetas), -1, 3)
-    bones = [truth.bone_names.index(b) for b in take_solve.JOINTS.values()]
+    bones = [truth.bone_names.index(b) for b in JOINTS.values()]
     expected = np.array([truth.forward_kinematics(t)[1][bones] for t in thetas])
-    error = np.linalg.norm(solved - expected, axis=-1)
-    assert error.mean() < 0.04, error.mean(axis=0).round(3)  # measured 3.0 cm on 6 s, seed 0
+    return np.linalg.norm(solved - expected, axis=-1)
+
+
+def test_the_estimated_limb_lengths_are_near_the_true_ones(simulated):
+    folder, out, report = simulated
+    truth = _core.Skeleton.load(str(folder / "truth_skeleton.json"))
+    estimated = _core.Skeleton.load(str(out / "skeleton.json"))
+    limbs = [truth.bone_names.index(b) for b in ("shin_l", "shin_r", "foot_l", "foot_r", "forearm_l", "forearm_r",
+                                                   "hand_l", "hand_r")]
+    error = np.abs(np.linalg.norm(estimated.offsets, axis=1) - np.linalg.norm(truth.offsets, axis=1))[limbs]
+    # Measured (seed 3): at most 1.2 cm (thigh), mean 0.8: the detector's 1-3 cm keypoint offsets
+    # are not estimated, so the issue's 1 cm is not reached everywhere.
+    assert error.max() < 0.02 and error.mean() < 0.012, error.round(3)
+    assert report["imus_used"] == 13
+
+
+def test_imu_headings_and_observed_mountings_are_recovered(simulated):
+    folder, out, _ = simulated
+    truth = json.loads((folder / "truth.json").read_text())
+    skeleton = _core.Skeleton.load(str(folder / "truth_skeleton.json"))
+    headings, axes = [], []
+    for s in json.loads((out / "imus.json").read_text())["imus"]:
+        true = truth["sensors"][s["name"]]
+        ref = rotations.exp(np.array(s["reference"]))
+        headings.append(abs((np.degrees(np.arctan2(ref[1, 0], ref[0, 0])) - true["heading_deg"] + 180) % 360 - 180))
+        bone = skeleton.bone_names.index(s["bone"])
+        child = [c for c, p in enumerate(skeleton.parents) if p == bone and np.linalg.norm(skeleton.offsets[c]) > 0]
+        axis = skeleton.offsets[child[0]] / np.linalg.norm(skeleton.offsets[child[0]]) if child else np.array([0, 0, 1.0])
+        est, want = rotations.exp(np.array(s["mount"])).T @ axis, rotations.exp(np.array(true["mount"])).T @ axis
+        axes.append(np.degrees(np.arccos(np.clip(est @ want, -1, 1))))
+    # Measured (seed 3): headings median 1.7 deg, up to 7.5, and 27.6 at the standing foot (it
+    # barely turns in the window: heading and mounting cannot be told apart); the bone axis in
+    # the sensor frame median 4 deg. The video-only start (mocap.calibration.imus) was 7-30 deg.
+    assert np.median(headings) < 3.0 and sorted(headings)[-2] < 10.0, np.round(headings, 1)
+    assert np.median(axes) < 8.0, np.round(axes, 1)
+
+
+def test_the_imus_make_the_joint_centres_better_than_video_alone(simulated, video_only):
+    fused = joint_centre_errors(*simulated[:2])
+    video = joint_centre_errors(*video_only[:2])
+    assert video_only[2]["imus_used"] == 0
+    # Measured (4 s, seed 3): fused 2.02 cm, video only 2.34 cm (its skeleton from the same
+    # window calibration); frame-to-frame change of the error 3.5 times smaller with the IMUs.
+    assert fused.mean() < 0.025 and fused.mean() < 0.9 * video.mean(), (fused.mean(), video.mean())
+    jitter = lambda e: np.abs(np.diff(e, axis=0)).mean()  # noqa: E731
+    assert jitter(fused) < 0.5 * jitter(video), (jitter(fused), jitter(video))
 
 
 @pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(), reason="the real trial is not in .cache/")

@@ -32,8 +32,8 @@ ScaledChain::ScaledChain(const Skeleton* skeleton, int bone, const std::vector<i
     shift_block_.push_back(BlockOf(g, &shift_groups_));
     double mirror = 1.0;
     if (g >= 0) {
-      const int first = static_cast<int>(
-          std::find(shift_group.begin(), shift_group.end(), g) - shift_group.begin());
+      const int first = static_cast<int>(std::find(shift_group.begin(), shift_group.end(), g) -
+                                         shift_group.begin());
       if (skeleton->bone(first).offset.y() * skeleton->bone(j).offset.y() < 0) mirror = -1.0;
     }
     mirror_.push_back(mirror);

@@ -166,10 +166,12 @@ TEST_F(ResidualsTest, ShiftGroupsMoveLeftAndRightMirrored) {
   // One shift group for both hips: a shift of (0.01, 0.02, 0.03) moves the left hip by it and
   // the right hip by (0.01, -0.02, 0.03), in the pelvis frame.
   std::vector<int> shift(scene_.skeleton.num_bones(), -1);
-  const int left = scene_.skeleton.BoneIndex("thigh_l"), right = scene_.skeleton.BoneIndex("thigh_r");
+  const int left = scene_.skeleton.BoneIndex("thigh_l"),
+            right = scene_.skeleton.BoneIndex("thigh_r");
   shift[left] = shift[right] = 0;
   const Eigen::Vector3d d(0.01, 0.02, 0.03);
-  for (const auto& [bone, moved] : {std::pair{left, d}, std::pair{right, Eigen::Vector3d(0.01, -0.02, 0.03)}}) {
+  for (const auto& [bone, moved] :
+       {std::pair{left, d}, std::pair{right, Eigen::Vector3d(0.01, -0.02, 0.03)}}) {
     ScaledChain chain(&scene_.skeleton, bone, {}, shift);
     ASSERT_EQ(chain.num_shift_blocks(), 1);
     std::vector<double*> blocks = ChainBlocks(scene_.skeleton, bone, truth_.data());

@@ -84,7 +84,8 @@ class ScaledChain {
   std::vector<double> mirror_;  // per chain bone: -1 when its shift is mirrored in y
 };
 
-// E_P of one detection: blocks chain, site offset (3), scale blocks (1 each), shift blocks (3 each).
+// E_P of one detection: blocks chain, site offset (3), scale blocks (1 each), shift blocks (3
+// each).
 class SiteReprojectionResidual : public ceres::CostFunction {
  public:
   SiteReprojectionResidual(ScaledChain chain, const Camera* camera,

@@ -49,6 +49,18 @@ def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
     return out.reshape((len(out),) + x.shape[1:])
 
 
+def _longest_run(ok: np.ndarray) -> tuple[int, int]:
+    """[lo, hi) of the longest run of True."""
+    best, start = (0, 0), None
+    for i, v in enumerate(np.append(ok, False)):
+        if v and start is None:
+            start = i
+        elif not v and start is not None:
+            best = max(best, (start, i), key=lambda r: r[1] - r[0])
+            start = None
+    return best
+
+
 def _second_difference(x: np.ndarray, dt: float) -> np.ndarray:
     return (x[2:] - 2 * x[1:-1] + x[:-2]) / (dt * dt)
 
@@ -59,9 +71,11 @@ def estimate(skeleton: _core.Skeleton, site: _core.ImuSite, thetas: np.ndarray, 
     thetas (T, 66) at times (T,), and its readings there: quaternions (T, 4) w, x, y, z and
     accelerations (T, 3) sensor frame."""
     prior = usual_place(skeleton, site.bone)
-    ok = np.isfinite(quaternions).all(axis=1) & np.isfinite(accelerations).all(axis=1)
-    if ok.sum() < MIN_FRAMES or not ok.all():  # the filter needs an unbroken run
+    ok = np.isfinite(quaternions).all(axis=1) & np.isfinite(accelerations).all(axis=1) & np.isfinite(thetas).all(axis=1)
+    lo, hi = _longest_run(ok)  # the filter needs an unbroken run
+    if hi - lo < MIN_FRAMES:
         return ImuPosition(prior, 0, float("nan"))
+    thetas, times, quaternions, accelerations = thetas[lo:hi], times[lo:hi], quaternions[lo:hi], accelerations[lo:hi]
     dt = float(np.median(np.diff(times)))
     fk = [skeleton.forward_kinematics(t) for t in thetas]
     g = np.array([r[site.bone] for r, _ in fk])
