@@ -29,7 +29,9 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
                     record=tmp_path / "take.mcap")
     result = live.score(studio, run)
     assert result["dropped"] == 0, result
-    assert result["pos_error_cm"] < 4.0, result
+    # The session's calibration is estimated from the streams' first 5 s (live.calibrate);
+    # measured 2.3 cm at the joint centres over 20 s (`mocap demo`).
+    assert result["joint_centres_pos_cm"] < 3.5, result
     t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
     cams = np.array(["cam3" in p.cameras for p in run.poses])
     imus = np.array(["lower_back" in p.imus for p in run.poses])
@@ -151,5 +153,5 @@ def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_po
 
     n = min(len(poses), len(studio.truth))
     replayed = np.array([p.theta for p in sorted(poses, key=lambda p: p.capture_time_ns)[:n]])
-    error = evaluation.errors(studio.skeleton, studio.truth[:n], replayed, 1 / 60)["pos_error_cm"]
+    error = evaluation.errors(studio.skeleton, studio.truth[:n], replayed, 1 / 60, studio.session_skeleton)["pos_error_cm"]
     assert error < 1.2 * live.score(studio, first)["pos_error_cm"] + 0.2, error

@@ -86,7 +86,8 @@ def _demo(args: argparse.Namespace) -> int:
 
     from mocap import demo
 
-    result = demo.run(Path(args.out), args.seconds, vmc=args.vmc, seed=args.seed, record=args.record)
+    result = demo.run(Path(args.out), args.seconds, vmc=args.vmc, seed=args.seed, record=args.record,
+                      calibration=args.calibration)
     return 0 if result["solved"] else 1
 
 
@@ -271,6 +272,8 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--vmc", default=None, metavar="HOST:PORT", help="also stream the poses as VMC (OSC/UDP)")
     d.add_argument("--record", default=None, metavar="FILE", help="record every stream to this MCAP file")
     d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
+                   help="estimated: the host calibrates from the take's first 5 s (default); oracle: the truth")
     d.set_defaults(func=_demo)
 
     sm = sub.add_parser("simulate", help="simulate a take of the demo motion (cameras + IMUs) and write it as a "

@@ -20,6 +20,7 @@ import numpy as np
 import zmq
 
 from mocap import _core, demo_motion, paths, recording, rotations, transport, wire
+from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
 from mocap_edge.streams import Streams
@@ -34,11 +35,25 @@ class Studio:
     """A simulated take ready to be played: its session folder and truth."""
     session: Path
     streams: Path
-    skeleton: _core.Skeleton
+    skeleton: _core.Skeleton  # the truth's
     truth: np.ndarray  # (F, 66) at the frame times
     frame_times: np.ndarray  # (F,) s, as the cameras report them
     camera_ids: list[str]
     endpoints: dict[str, str]  # "cam0".. "hub0", "host" -> endpoint
+    session_skeleton: _core.Skeleton  # the session's: estimated, or the truth's (oracle)
+    calibration: str  # "estimated" or "oracle"
+
+
+def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.Calibration:
+    """The calibration from the first seconds of the streams, as a studio's host calibrates
+    from the first seconds of a capture (mocap.calibration.window): nothing of the truth."""
+    keypoints = np.where(streams.detected[:, None, None, None], streams.keypoints, 0.0).astype(float)
+    times = streams.frame_times_ns * 1e-9
+    imu_times = streams.imu_times_ns * 1e-9
+    readings = window.readings_at(times, [(name, bone, imu_times, streams.imu_quaternions[:, i],
+                                           streams.imu_accelerations[:, i])
+                                          for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
+    return window.estimate(rig, keypoints, times, streams.layout, readings)
 
 
 def free_ports(n: int) -> list[int]:
@@ -59,10 +74,12 @@ def _imus_json(skeleton: _core.Skeleton, imus) -> dict:
         for s in imus]}
 
 
-def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0) -> Studio:
+def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0,
+            calibration: str = "estimated") -> Studio:
     """Simulates `seconds` of the demo motion and writes the session (skeleton, told rig,
-    IMU set with its mounting — oracle calibration until the calibration issue — layout,
-    prior, endpoints) and the stream file into `folder`."""
+    IMU set, layout, prior, endpoints) and the stream file into `folder`. The skeleton and
+    the IMUs' mounting, heading and position are estimated from the streams' first seconds
+    (`calibrate`), or the truth's with calibration="oracle"."""
     folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
@@ -85,14 +102,22 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     streams.save(folder / "streams.npz")
     ports = free_ports(len(camera_ids) + 2)
     endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host"], ports)}
-    (folder / "skeleton.json").write_text(skeleton.to_json())
+    session_skeleton, imus = skeleton, t.imus
+    if calibration == "estimated":
+        cal = calibrate(streams, t.rig, [s.bone for s in t.imus])
+        session_skeleton, imus = cal.skeleton, cal.imus
+        (folder / "calibration.json").write_text(json.dumps(cal.report, indent=1))
+    elif calibration != "oracle":
+        raise InputError(f"calibration is 'estimated' or 'oracle', not {calibration!r}")
+    (folder / "skeleton.json").write_text(session_skeleton.to_json())
     (folder / "rig.json").write_text(t.rig.to_json())
-    (folder / "imus.json").write_text(json.dumps(_imus_json(skeleton, t.imus), indent=1))
+    (folder / "imus.json").write_text(json.dumps(_imus_json(session_skeleton, imus), indent=1))
     session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
                "layout": str(paths.LAYOUTS / f"{t.layout.name}.json"), "prior": str(paths.HOST_DATA / "prior_default.json"),
                "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}
     (folder / "session.json").write_text(json.dumps(session, indent=1))
-    return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids, endpoints)
+    return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids, endpoints,
+                  session_skeleton, calibration)
 
 
 @dataclasses.dataclass
@@ -186,8 +211,10 @@ def score(studio: Studio, run: Run) -> dict:
            "latency_max_ms": float(latency.max()) if len(latency) else None,
            "host_dropped": run.host_summary.get("dropped", {})}
     if len(matched) > 2:
-        e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, float(np.median(np.diff(studio.frame_times))))
-        out.update({k: e[k] for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms")})
+        e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, float(np.median(np.diff(studio.frame_times))),
+                              studio.session_skeleton)
+        out.update({k: e[k] for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm",
+                                      "joint_centres_vel_cms")})
     out["thetas"], out["times"] = solved, studio.frame_times[matched]
     return out
 
@@ -203,5 +230,6 @@ def bench(seconds: float = 60.0) -> dict:
     return {"bench": "live", "seconds": seconds, "cameras": len(studio.camera_ids), "imus": 13,
             "imu_rate_hz": IMU_RATE, "latency_p50_ms": result["latency_p50_ms"],
             "latency_p99_ms": result["latency_p99_ms"], "latency_max_ms": result["latency_max_ms"],
-            "frames": result["frames"], "dropped": result["dropped"], "pos_error_cm": result.get("pos_error_cm"),
+            "frames": result["frames"], "dropped": result["dropped"], "calibration": studio.calibration,
+            "joint_centres_pos_cm": result.get("joint_centres_pos_cm"), "pos_error_cm": result.get("pos_error_cm"),
             "host_dropped_inputs": result["host_dropped"]}

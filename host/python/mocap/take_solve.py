@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, paths, rotations
-from mocap.calibration import imus as imu_calibration
 from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
@@ -52,32 +51,15 @@ def subject(take: TakeFolder) -> np.ndarray:
     return out
 
 
-def imu_readings(take: TakeFolder, times: np.ndarray) -> window.ImuReadings | None:
-    """The take's IMU readings at the video frames' times: orientations slerped, accelerations
-    interpolated, NaN before a sensor's first sample and after its last."""
-    if not take.imus:
-        return None
-    quats = np.full((len(times), len(take.imus), 4), np.nan)
-    accs = np.full((len(times), len(take.imus), 3), np.nan)
-    for i, imu in enumerate(take.imus):
-        inside = (times >= imu.times_s[0]) & (times <= imu.times_s[-1])
-        r = imu_calibration.at_times(times[inside], imu.times_s, imu.quaternions)
-        quats[inside, i] = rotations.quaternion_from_matrix(r)
-        accs[inside, i] = np.stack([np.interp(times[inside], imu.times_s, imu.accelerations[:, k])
-                                    for k in range(3)], axis=1)
-    return window.ImuReadings([m.sensor for m in take.imus], [], quats, accs)
-
-
 def solve_take(folder: Path, out: Path) -> dict:
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
     det = subject(take)
     times = np.arange(take.n_frames) / take.frame_rate
-    readings = imu_readings(take, times)
-    base = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
-    if readings is not None:
-        readings.bones = [base.bone_names.index(m.bone) for m in take.imus]
+    bones = _core.Skeleton.load(str(paths.DEFAULT_SKELETON)).bone_names
+    readings = window.readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
+                                          for m in take.imus]) if take.imus else None
     cal = window.estimate(take.rig, det, times, take.layout, readings)
     solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus)
     n = len(cal.imus)
