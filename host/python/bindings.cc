@@ -424,6 +424,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("scale_sigma", &CalibrationOptions::scale_sigma)
       .def_readwrite("shift_sigma", &CalibrationOptions::shift_sigma)
       .def_readwrite("shift_sigmas", &CalibrationOptions::shift_sigmas)
+      .def_readwrite("joint_sigmas", &CalibrationOptions::joint_sigmas)
       .def_readwrite("estimate_shifts", &CalibrationOptions::estimate_shifts)
       .def_readwrite("site_sigma", &CalibrationOptions::site_sigma)
       .def_readwrite("estimate_scales", &CalibrationOptions::estimate_scales)

@@ -40,6 +40,9 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>&
   if (!(options.scale_sigma > 0) || !(options.shift_sigma > 0) || !(options.site_sigma > 0) ||
       options.max_iterations < 1)
     return Fail(error, "the priors' sigmas must be positive, max_iterations at least 1");
+  if (!options.joint_sigmas.empty() &&
+      options.joint_sigmas.size() != static_cast<size_t>(skeleton.num_bones()))
+    return Fail(error, "joint_sigmas needs one entry per bone (or none)");
   for (const Eigen::Vector3d& sigma : options.shift_sigmas) {
     if (!(sigma.array() > 0).all() || !sigma.allFinite())
       return Fail(error, "shift_sigmas must be positive");
@@ -98,6 +101,19 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
   if (prior && terms.pca_deviation.enabled)
     deviation = std::make_unique<PcaDeviationResidual>(*prior, terms.pca_deviation.weight);
   const std::vector<int> no_groups;
+  // Per bone: the joint convention's prior on its local rotation (null: none).
+  std::vector<std::unique_ptr<ceres::CostFunction>> joint_priors(skeleton.num_bones());
+  for (size_t b = 1; b < options.joint_sigmas.size(); ++b) {
+    std::vector<int> held;
+    for (int k = 0; k < 3; ++k) {
+      const double sigma = options.joint_sigmas[b](k);
+      if (sigma > 0 && std::isfinite(sigma)) held.push_back(k);
+    }
+    if (held.empty()) continue;
+    ceres::Matrix a = ceres::Matrix::Zero(static_cast<int>(held.size()), 3);
+    for (size_t r = 0; r < held.size(); ++r) a(r, held[r]) = 1.0 / options.joint_sigmas[b](held[r]);
+    joint_priors[b] = std::make_unique<ceres::NormalPrior>(a, ceres::Vector::Zero(3));
+  }
   // (frame, imu) of each orientation residual, for the report.
   std::vector<std::pair<int, int>> readings;
   std::vector<Eigen::Matrix3d> reading_world;
@@ -141,6 +157,10 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
     }
     std::vector<double*> joints;
     for (int b = 1; b < skeleton.num_bones(); ++b) joints.push_back(theta + BlockOffset(b));
+    for (int b = 1; b < skeleton.num_bones(); ++b) {
+      if (joint_priors[b])
+        problem.AddResidualBlock(joint_priors[b].get(), nullptr, theta + BlockOffset(b));
+    }
     if (projection) problem.AddResidualBlock(projection.get(), nullptr, joints);
     if (deviation) problem.AddResidualBlock(deviation.get(), nullptr, joints);
   }

@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 
 #include "mocap/kinematics.h"
 #include "mocap/so3.h"
@@ -98,6 +100,41 @@ TEST_F(WindowCalibrationTest, RecoversLengthsHeadingsAndObservedMountings) {
     EXPECT_LT(testing::MaxSiteError(truth_, r.thetas[t], thetas_[t]), 1e-4);
 }
 
+TEST_F(WindowCalibrationTest, AKneeHingePinsTheLegMountingsTwist) {
+  // Knees that turn about their y axis only (as the clips' skeletons' do): with the hinge as
+  // a joint convention, the thigh and shin mountings come back whole, twist included; without
+  // it the twist about the bone's axis is left where it started.
+  const int knees[2] = {truth_.skeleton.BoneIndex("shin_l"), truth_.skeleton.BoneIndex("shin_r")};
+  for (size_t t = 0; t < thetas_.size(); ++t) {
+    for (int knee : knees) {
+      thetas_[t](3 + 3 * knee) = 0.0;
+      thetas_[t](5 + 3 * knee) = 0.0;
+    }
+    frames_[t] = testing::Render(truth_, thetas_[t], 0.1 * t);
+  }
+  auto leg_mount_error = [&](const CalibrationResult& r) {
+    double worst = 0;
+    for (size_t i = 0; i < truth_.imus.size(); ++i) {
+      const std::string& bone = truth_.skeleton.bone(truth_.imus[i].bone).name;
+      if (bone.rfind("thigh", 0) == 0 || bone.rfind("shin", 0) == 0)
+        worst = std::max(worst, AngleBetween(r.imus[i].mount, truth_.imus[i].mount));
+    }
+    return worst;
+  };
+  CalibrationResult free, hinged;
+  std::string error;
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &free, &error))
+      << error;
+  options_.joint_sigmas.assign(told_.skeleton.num_bones(), Eigen::Vector3d::Zero());
+  for (int knee : knees) options_.joint_sigmas[knee] = Eigen::Vector3d(0.01, 0.0, 0.01);
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &hinged, &error))
+      << error;
+  EXPECT_LT(leg_mount_error(hinged), 0.1 * kDeg);
+  EXPECT_GT(leg_mount_error(free), 1.0 * kDeg);
+}
+
 TEST_F(WindowCalibrationTest, HeldParametersStayWhereTheyStart) {
   options_.estimate_headings = false;
   options_.estimate_scales = false;
@@ -129,6 +166,11 @@ TEST_F(WindowCalibrationTest, InconsistentInputsAreRefused) {
   EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
                                frames_, starts_, options_, &r, &error));
   EXPECT_NE(error.find("scale_group"), std::string::npos) << error;
+  options_.scale_group = group_;
+  options_.joint_sigmas.assign(3, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               frames_, starts_, options_, &r, &error));
+  EXPECT_NE(error.find("joint_sigmas"), std::string::npos) << error;
   EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
                                {}, {}, CalibrationOptions(), &r, &error));
   EXPECT_NE(error.find("no frames"), std::string::npos) << error;

@@ -43,6 +43,12 @@ struct CalibrationOptions {
   // tiny sigma holds an axis that trades with another parameter (a gauge), e.g. the hips'
   // height against the spine's length when no keypoint marks the pelvis origin.
   std::vector<Eigen::Vector3d> shift_sigmas;
+  // Per bone (or empty): sigma (rad) of each component of its rotation relative to its
+  // parent, in every frame; zero or infinite leaves the component free. An anatomical
+  // convention that fixes what the data leave free: a knee turning about one axis only, an
+  // elbow without axial twist, pin the twist of the limbs' frames and so of their IMUs'
+  // mountings, which video does not see.
+  std::vector<Eigen::Vector3d> joint_sigmas;
   double site_sigma = 0.03;  // m, prior on each keypoint site around the layout's
   bool estimate_scales = true, estimate_shifts = true, estimate_sites = true,
        estimate_mounts = true, estimate_headings = true;
