@@ -91,6 +91,19 @@ def _demo(args: argparse.Namespace) -> int:
     return 0 if result["solved"] else 1
 
 
+def _calibrate(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mocap import calibrate
+
+    report = calibrate.calibrate(Path(args.recording), Path(args.out), Path(args.session) if args.session else None,
+                                 args.seconds)
+    print(json.dumps({"session": str(Path(args.out) / "session.json"), "frames": report["frames"],
+                      "imus_calibrated": len(report["imus_calibrated"]), "imus_missing": report["imus_missing"]}),
+          flush=True)
+    return 0
+
+
 def _solve(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -275,6 +288,15 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
                    help="estimated: the host calibrates from the take's first 5 s (default); oracle: the truth")
     d.set_defaults(func=_demo)
+
+    ca = sub.add_parser("calibrate", help="a live session whose skeleton and IMU mounting, heading and position are "
+                        "estimated from the first seconds of a recording (docs/calibration.md)")
+    ca.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
+    ca.add_argument("--session", default=None, help="session giving rig, layout, IMU names and bones, endpoints "
+                    "(default: the one attached to the recording)")
+    ca.add_argument("--out", required=True, help="folder for the calibrated session (session.json and its files)")
+    ca.add_argument("--seconds", type=float, default=5.0, help="length of the calibration window (default 5)")
+    ca.set_defaults(func=_calibrate)
 
     sm = sub.add_parser("simulate", help="simulate a take of the demo motion (cameras + IMUs) and write it as a "
                         "take folder (docs/take_format.md), with its truth (truth.json) beside it")

@@ -26,27 +26,32 @@ from mocap.solver import Solver
 from mocap.take_folder import TakeFolder, read_take
 from mocap_edge.detect.openpose_json import box_size
 
-
+LAYOUT_SIZES = {"coco17": 17, "body25b": 25, "blazepose33": 33}
 
 
 def subject(take: TakeFolder) -> np.ndarray:
-    """(F, C, K, 3) the subject's keypoints (zeros where a camera saw nobody): per camera, the
-    person nearest the previous frame's choice, the largest one to start with or after a gap."""
-    cams, k = len(take.people), {"coco17": 17, "body25b": 25, "blazepose33": 33}[take.layout]
-    out = np.zeros((take.n_frames, cams, k, 3))
-    for c in range(cams):
+    """(F, C, K, 3) the subject's keypoints of a take (choose_subject)."""
+    return choose_subject(take.people, take.n_frames, LAYOUT_SIZES[take.layout])
+
+
+def choose_subject(people: list, n_frames: int, k: int) -> np.ndarray:
+    """(F, C, K, 3) the subject's keypoints from people[camera][frame] (P, K, 3) (zeros where a
+    camera saw nobody): per camera, the person nearest the previous frame's choice, the
+    largest one to start with or after a gap."""
+    out = np.zeros((n_frames, len(people), k, 3))
+    for c, frames in enumerate(people):
         previous = None
-        for f, people in enumerate(take.people[c]):
-            if len(people) == 0:
+        for f, persons in enumerate(frames):
+            if len(persons) == 0:
                 previous = None
                 continue
             if previous is None:
-                chosen = max(people, key=box_size)
+                chosen = max(persons, key=box_size)
             else:
                 def distance(p):
                     both = (p[:, 2] > 0) & (previous[:, 2] > 0)
                     return np.median(np.linalg.norm(p[both, :2] - previous[both, :2], axis=1)) if both.any() else np.inf
-                chosen = min(people, key=distance)
+                chosen = min(persons, key=distance)
             out[f, c] = previous = chosen
     return out
 

@@ -1,0 +1,120 @@
+"""`mocap calibrate --recording FILE [--session S] --out DIR`: a live session whose skeleton
+and IMU sites are estimated from the first seconds of a recording of the studio's streams
+(`mocap record`), so that mocapd captures without oracle calibration.
+
+Camera frames are grouped by capture time (each camera's frame nearest a reference camera's
+within half a frame period); the subject is chosen per camera as for take folders; IMU
+samples are taken per sensor (invalid readings dropped). The given session (by default the
+one attached to the recording) supplies the rig, the layout, the prior, the endpoints and
+the IMU set's names and bones; its skeleton and mountings are replaced. DIR receives
+session.json, skeleton.json, imus.json and calibration.json, and a copy of the session's rig,
+layout and prior files.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, recording, wire
+from mocap.calibration import window
+from mocap.errors import InputError
+from mocap.take_solve import LAYOUT_SIZES, choose_subject, imu_sites_json
+
+INVALID_ORIENTATION, INVALID_ACCELERATION = 1, 2  # ImuSample.Status bits
+
+
+def _inputs(path: Path, camera_names: list[str]):
+    """Per camera [(capture_time_ns, (P, K, 3))], per sensor [(time_ns, q wxyz, a)], layout."""
+    cams, imus, layouts = defaultdict(list), defaultdict(list), set()
+    for m in recording.read(path):
+        if m.type_name == "mocap.v1.KeypointFrame":
+            f = wire.KeypointFrame.FromString(m.payload)
+            if f.camera_id not in camera_names or not f.detected:
+                continue
+            layouts.add(f.keypoint_layout)
+            people = np.array([np.stack([p.x, p.y, p.confidence], axis=1) for p in f.persons if len(p.x)]
+                              ) if f.persons else np.zeros((0, 0, 3))
+            cams[f.camera_id].append((f.capture_time_ns, people))
+        elif m.type_name == "mocap.v1.ImuBatch":
+            for s in wire.ImuBatch.FromString(m.payload).samples:
+                q = [np.nan] * 4 if s.status & INVALID_ORIENTATION else [s.qw, s.qx, s.qy, s.qz]
+                a = [np.nan] * 3 if s.status & INVALID_ACCELERATION else [s.ax, s.ay, s.az]
+                imus[s.sensor_id].append((s.sample_time_ns, q, a))
+    if len(layouts) > 1:
+        raise InputError(f"{path}: the cameras use different keypoint layouts {sorted(layouts)}")
+    return cams, imus, layouts.pop() if layouts else None
+
+
+def _frames(cams: dict, camera_names: list[str], k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(F,) capture times (ns) of the reference camera (the one with most frames) and the
+    subject's keypoints (F, C, K, 3)."""
+    reference = max(cams, key=lambda c: len(cams[c]))
+    times = np.array(sorted(t for t, _ in cams[reference]))
+    half = 0.5 * float(np.median(np.diff(times))) if len(times) > 1 else 1e9
+    people = [[np.zeros((0, k, 3)) for _ in times] for _ in camera_names]
+    for c, name in enumerate(camera_names):
+        for t, persons in cams.get(name, []):
+            f = int(np.argmin(np.abs(times - t)))
+            if abs(times[f] - t) <= half and persons.shape[1:] == (k, 3):
+                people[c][f] = persons
+    return times, choose_subject(people, len(times), k)
+
+
+def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS) -> dict:
+    recording_path, out = Path(recording_path), Path(out)
+    with tempfile.TemporaryDirectory() as attached:
+        if session is None:
+            session = recording.read_session(recording_path, attached)
+            if session is None:
+                raise InputError(f"{recording_path}: no session is attached; give one with --session")
+        session = Path(session).resolve()
+        config = json.loads(session.read_text())
+        base = session.parent
+        skeleton = _core.Skeleton.load(str(base / config["skeleton"]))
+        rig = _core.Rig.load(str(base / config["rig"]))
+        imu_set = _core.load_imu_sites(str(base / config["imus"]), skeleton)
+        names = [c.name for c in rig.cameras]
+        cams, samples, layout = _inputs(recording_path, names)
+        if not cams or layout is None:
+            raise InputError(f"{recording_path}: no camera frame with detections of the session's cameras")
+        times_ns, det = _frames(cams, names, LAYOUT_SIZES[layout])
+        t0 = times_ns[0]
+        keep = times_ns - t0 <= (seconds + 1.0) * 1e9  # the window and a margin
+        sensors = []
+        for s in imu_set:
+            rows = samples.get(s.name, [])
+            if len(rows) < 2:
+                continue
+            t = np.array([r[0] for r in rows], dtype=np.int64)
+            order = np.argsort(t, kind="stable")
+            t, unique = np.unique(t[order], return_index=True)
+            q = np.array([rows[i][1] for i in order[unique]])
+            a = np.array([rows[i][2] for i in order[unique]])
+            ok = np.isfinite(q).all(axis=1) & np.isfinite(a).all(axis=1)
+            if ok.sum() >= 2:
+                sensors.append((s.name, s.bone, (t[ok] - t0) * 1e-9, q[ok], a[ok]))
+        frame_times = (times_ns[keep] - t0) * 1e-9
+        readings = window.readings_at(frame_times, sensors) if sensors else None
+        cal = window.estimate(rig, det[keep], frame_times, layout, readings, seconds=seconds)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "skeleton.json").write_text(cal.skeleton.to_json())
+        (out / "imus.json").write_text(json.dumps(imu_sites_json(cal), indent=1))
+        report = {"recording": str(recording_path), "session": str(session), "frames": int(keep.sum()),
+                  "imus_calibrated": [s[0] for s in sensors],
+                  "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
+                  "window": cal.report}
+        (out / "calibration.json").write_text(json.dumps(report, indent=1))
+        for key in ("rig", "layout", "prior"):  # copied: an attached session lives in a temporary folder
+            if config.get(key):
+                source = base / config[key]
+                shutil.copyfile(source, out / source.name)
+                config[key] = source.name
+        config["skeleton"], config["imus"] = "skeleton.json", "imus.json"
+        (out / "session.json").write_text(json.dumps(config, indent=1))
+    return report
