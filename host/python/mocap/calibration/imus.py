@@ -13,10 +13,9 @@ neighbours) add noise, not bias; frames whose residual is far above the median a
 
 Where it stands (simulated take, `host/python/tests/test_imu_calibration.py`): fed the true
 bone orientations it recovers headings and mountings to 0.1-2 degrees (up to 5 at a foot);
-fed a video-only solve's, 7-30 degrees — the twist of a limb about its
-own axis is what video sees least. So `mocap solve --take` does not use it yet. Next: use only
-the well-observed bone axis from video (2 DOF of the mounting and the heading), and the
-twist from the fused solve or the accelerometer.
+fed a video-only solve's, 7-30 degrees — the twist of a limb about its own axis is what
+video sees least. It is the start of the window calibration (mocap.calibration.window),
+which solves the mountings, the headings and the poses together.
 """
 
 from __future__ import annotations
