@@ -68,6 +68,210 @@ double MedianOf(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The window's unknowns, each a Ceres parameter block (stable addresses: sized once).
+struct Unknowns {
+  std::vector<Eigen::VectorXd> thetas;
+  std::vector<double> scales;           // per length group, relative
+  std::vector<Eigen::Vector3d> shifts;  // per shift group, m
+  std::vector<Eigen::Vector3d> sites;   // per keypoint, bone frame, m
+  std::vector<Eigen::Vector3d> mounts;  // per IMU: m of M0 Exp(m)
+  std::vector<double> headings;         // per IMU: psi of Rz(psi) R_ig0
+};
+
+// One measured orientation in the problem, for the report.
+struct Reading {
+  int frame, imu;
+  Eigen::Matrix3d world;  // R_ig0 R_i
+};
+
+// The window's Ceres problem: the residuals borrow their cost functions from here.
+class WindowProblem {
+ public:
+  WindowProblem(const Skeleton& skeleton, const Rig& rig, const KeypointLayout& layout,
+                const std::vector<ImuSite>& imus, const std::optional<PosePrior>& prior,
+                const CalibrationOptions& options, Unknowns* x)
+      : skeleton_(skeleton),
+        rig_(rig),
+        layout_(layout),
+        imus_(imus),
+        options_(options),
+        x_(x),
+        problem_(Borrowing()),
+        position_loss_(MakeLoss(options.terms.position)),
+        orientation_loss_(MakeLoss(options.terms.orientation)) {
+    const SolverOptions& terms = options.terms;
+    if (prior && terms.pca_projection.enabled)
+      projection_ = std::make_unique<PcaProjectionResidual>(*prior, terms.pca_projection.weight);
+    if (prior && terms.pca_deviation.enabled)
+      deviation_ = std::make_unique<PcaDeviationResidual>(*prior, terms.pca_deviation.weight);
+    MakeJointPriors();
+    keypoint_observations_.assign(layout.size(), 0);
+  }
+
+  // E_P, E_R, the joint conventions and the PCA terms of frame t.
+  void AddFrame(const FrameObservations& frame, int t) {
+    InputCounts counts;
+    const CleanFrame clean = ValidateFrame(frame, rig_, layout_, imus_, options_.terms, &counts);
+    double* theta = x_->thetas[t].data();
+    if (options_.terms.position.enabled) AddKeypoints(clean, theta);
+    if (options_.terms.orientation.enabled) AddOrientations(clean, t, theta);
+    std::vector<double*> joints;
+    for (int b = 1; b < skeleton_.num_bones(); ++b) {
+      joints.push_back(theta + BlockOffset(b));
+      if (joint_priors_[b])
+        problem_.AddResidualBlock(joint_priors_[b].get(), nullptr, joints.back());
+    }
+    if (projection_) problem_.AddResidualBlock(projection_.get(), nullptr, joints);
+    if (deviation_) problem_.AddResidualBlock(deviation_.get(), nullptr, joints);
+  }
+
+  // The Gaussian priors on the sites, scales and shifts in the problem; held blocks.
+  void AddParameterPriors(const std::vector<Eigen::Vector3d>& sites0) {
+    for (size_t k = 0; k < x_->sites.size(); ++k)
+      AddPrior(x_->sites[k].data(), sites0[k].data(),
+               Eigen::Vector3d::Constant(options_.site_sigma), options_.estimate_sites);
+    const double one = 1.0;
+    for (double& s : x_->scales)
+      AddPrior(&s, &one, Eigen::VectorXd::Constant(1, options_.scale_sigma),
+               options_.estimate_scales);
+    const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+    for (size_t v = 0; v < x_->shifts.size(); ++v) {
+      const Eigen::Vector3d sigma = v < options_.shift_sigmas.size()
+                                        ? options_.shift_sigmas[v]
+                                        : Eigen::Vector3d::Constant(options_.shift_sigma);
+      AddPrior(x_->shifts[v].data(), zero.data(), sigma, options_.estimate_shifts);
+    }
+    for (size_t i = 0; i < imus_.size(); ++i) {
+      if (!problem_.HasParameterBlock(x_->mounts[i].data())) continue;
+      if (!options_.estimate_mounts) problem_.SetParameterBlockConstant(x_->mounts[i].data());
+      if (!options_.estimate_headings) problem_.SetParameterBlockConstant(&x_->headings[i]);
+    }
+  }
+
+  ceres::Problem& problem() { return problem_; }
+  const std::vector<Reading>& readings() const { return readings_; }
+  const std::vector<int>& keypoint_observations() const { return keypoint_observations_; }
+
+ private:
+  static ceres::Problem::Options Borrowing() {
+    ceres::Problem::Options o;
+    o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return o;
+  }
+
+  // Per bone with a convention: its prior on the bone's local rotation.
+  void MakeJointPriors() {
+    joint_priors_.resize(skeleton_.num_bones());
+    for (size_t b = 1; b < options_.joint_sigmas.size(); ++b) {
+      std::vector<int> held;
+      for (int k = 0; k < 3; ++k) {
+        const double sigma = options_.joint_sigmas[b](k);
+        if (sigma > 0 && std::isfinite(sigma)) held.push_back(k);
+      }
+      if (held.empty()) continue;
+      ceres::Matrix a = ceres::Matrix::Zero(static_cast<int>(held.size()), 3);
+      for (size_t r = 0; r < held.size(); ++r)
+        a(r, held[r]) = 1.0 / options_.joint_sigmas[b](held[r]);
+      joint_priors_[b] = std::make_unique<ceres::NormalPrior>(a, ceres::Vector::Zero(3));
+    }
+  }
+
+  void AddKeypoints(const CleanFrame& clean, double* theta) {
+    BodyPose start;
+    ForwardKinematics(skeleton_, theta, &start);
+    for (const Detection& d : clean.detections) {
+      const int bone = layout_.sites[d.keypoint].bone;
+      Eigen::Vector2d pixel;
+      const Eigen::Vector3d x = start.position[bone] + start.rotation[bone] * x_->sites[d.keypoint];
+      if (!rig_.cameras[d.camera].Project(x, &pixel)) continue;  // behind the camera at the start
+      ScaledChain chain(&skeleton_, bone, options_.scale_group, options_.shift_group);
+      std::vector<double*> blocks = ChainBlocks(skeleton_, bone, theta);
+      blocks.push_back(x_->sites[d.keypoint].data());
+      for (int g : chain.scale_groups()) blocks.push_back(&x_->scales[g]);
+      for (int g : chain.shift_groups()) blocks.push_back(x_->shifts[g].data());
+      costs_.emplace_back(new SiteReprojectionResidual(
+          chain, &rig_.cameras[d.camera], d.pixel, d.confidence, options_.terms.position.weight));
+      problem_.AddResidualBlock(costs_.back().get(), position_loss_.get(), blocks);
+      ++keypoint_observations_[d.keypoint];
+    }
+  }
+
+  void AddOrientations(const CleanFrame& clean, int t, double* theta) {
+    for (size_t i = 0; i < imus_.size(); ++i) {
+      if (!clean.imu_world[i]) continue;
+      std::vector<double*> blocks = ChainBlocks(skeleton_, imus_[i].bone, theta);
+      blocks.push_back(x_->mounts[i].data());
+      blocks.push_back(&x_->headings[i]);
+      costs_.emplace_back(new MountedOrientationResidual(ScaledChain(&skeleton_, imus_[i].bone, {}),
+                                                         imus_[i].mount, *clean.imu_world[i],
+                                                         options_.terms.orientation.weight));
+      problem_.AddResidualBlock(costs_.back().get(), orientation_loss_.get(), blocks);
+      readings_.push_back({t, static_cast<int>(i), *clean.imu_world[i]});
+    }
+  }
+
+  // A prior on a block that is in the problem, held when it is not estimated.
+  void AddPrior(double* block, const double* mean, const Eigen::VectorXd& sigma, bool estimated) {
+    if (!problem_.HasParameterBlock(block)) return;
+    costs_.emplace_back(GaussianPrior(mean, sigma));
+    problem_.AddResidualBlock(costs_.back().get(), nullptr, block);
+    if (!estimated) problem_.SetParameterBlockConstant(block);
+  }
+
+  const Skeleton& skeleton_;
+  const Rig& rig_;
+  const KeypointLayout& layout_;
+  const std::vector<ImuSite>& imus_;
+  const CalibrationOptions& options_;
+  Unknowns* x_;
+  ceres::Problem problem_;
+  std::unique_ptr<ceres::LossFunction> position_loss_, orientation_loss_;
+  std::unique_ptr<ceres::CostFunction> projection_, deviation_;
+  std::vector<std::unique_ptr<ceres::CostFunction>> joint_priors_, costs_;
+  std::vector<Reading> readings_;
+  std::vector<int> keypoint_observations_;
+};
+
+// The skeleton with the estimated offsets, as ScaledChain poses them (rest-pose differences).
+bool AdjustedSkeleton(const Skeleton& skeleton, const CalibrationOptions& options,
+                      const Unknowns& x, Skeleton* out, std::string* error) {
+  std::vector<Skeleton::Bone> bones = skeleton.bones();
+  const std::vector<double> rest_theta(skeleton.pose_dim(), 0.0);
+  for (int b = 1; b < skeleton.num_bones(); ++b) {
+    ScaledChain chain(&skeleton, b, options.scale_group, options.shift_group);
+    std::vector<const double*> theta_blocks, scales, shifts;
+    for (int j : chain.chain()) theta_blocks.push_back(rest_theta.data() + BlockOffset(j));
+    for (int g : chain.scale_groups()) scales.push_back(&x.scales[g]);
+    for (int g : chain.shift_groups()) shifts.push_back(x.shifts[g].data());
+    BodyPose rest;
+    chain.Pose(theta_blocks.data(), scales.data(), shifts.data(), &rest);
+    bones[b].offset = rest.position[b] - rest.position[skeleton.bone(b).parent];
+  }
+  return Skeleton::Create(std::move(bones), out, error);
+}
+
+// Median angle (deg) per IMU between its calibrated reading and its solved sensor orientation.
+std::vector<double> ImuResidualsDeg(const CalibrationResult& r, const Unknowns& x,
+                                    const std::vector<Reading>& readings) {
+  std::vector<std::vector<double>> angles(r.imus.size());
+  BodyPose pose;
+  int posed = -1;
+  for (const Reading& reading : readings) {
+    if (reading.frame != posed)
+      ForwardKinematics(r.skeleton, r.thetas[reading.frame].data(), &pose);
+    posed = reading.frame;
+    const ImuSite& site = r.imus[reading.imu];
+    const Eigen::Matrix3d measured =
+        Exp(Eigen::Vector3d(0, 0, x.headings[reading.imu])) * reading.world;
+    angles[reading.imu].push_back(AngleBetween(measured, pose.rotation[site.bone] * site.mount) *
+                                  180 / M_PI);
+  }
+  std::vector<double> out;
+  for (auto& a : angles) out.push_back(MedianOf(a));
+  return out;
+}
+
 }  // namespace
 
 bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLayout& layout,
@@ -76,127 +280,20 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
                      const std::vector<Eigen::VectorXd>& thetas, const CalibrationOptions& options,
                      CalibrationResult* result, std::string* error) {
   if (!CheckInputs(skeleton, frames, thetas, prior, options, error)) return false;
-  const SolverOptions& terms = options.terms;
-  const int groups = NumGroups(options.scale_group), shift_groups = NumGroups(options.shift_group);
-  std::vector<double> scales(groups, 1.0);
-  std::vector<Eigen::Vector3d> shifts(shift_groups, Eigen::Vector3d::Zero());
-  std::vector<Eigen::Vector3d> sites, sites0;
-  for (const Site& s : layout.sites) sites.push_back(s.offset);
-  sites0 = sites;
-  std::vector<Eigen::Vector3d> mounts(imus.size(), Eigen::Vector3d::Zero());
-  std::vector<double> headings(imus.size(), 0.0);
-  result->thetas = thetas;
-  result->keypoint_observations.assign(layout.size(), 0);
+  Unknowns x{thetas,
+             std::vector<double>(NumGroups(options.scale_group), 1.0),
+             std::vector<Eigen::Vector3d>(NumGroups(options.shift_group), Eigen::Vector3d::Zero()),
+             {},
+             std::vector<Eigen::Vector3d>(imus.size(), Eigen::Vector3d::Zero()),
+             std::vector<double>(imus.size(), 0.0)};
+  for (const Site& s : layout.sites) x.sites.push_back(s.offset);
+  const std::vector<Eigen::Vector3d> sites0 = x.sites;
 
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  std::unique_ptr<ceres::LossFunction> position_loss(MakeLoss(terms.position)),
-      orientation_loss(MakeLoss(terms.orientation));
-  std::unique_ptr<ceres::CostFunction> projection, deviation;
-  if (prior && terms.pca_projection.enabled)
-    projection = std::make_unique<PcaProjectionResidual>(*prior, terms.pca_projection.weight);
-  if (prior && terms.pca_deviation.enabled)
-    deviation = std::make_unique<PcaDeviationResidual>(*prior, terms.pca_deviation.weight);
-  const std::vector<int> no_groups;
-  // Per bone: the joint convention's prior on its local rotation (null: none).
-  std::vector<std::unique_ptr<ceres::CostFunction>> joint_priors(skeleton.num_bones());
-  for (size_t b = 1; b < options.joint_sigmas.size(); ++b) {
-    std::vector<int> held;
-    for (int k = 0; k < 3; ++k) {
-      const double sigma = options.joint_sigmas[b](k);
-      if (sigma > 0 && std::isfinite(sigma)) held.push_back(k);
-    }
-    if (held.empty()) continue;
-    ceres::Matrix a = ceres::Matrix::Zero(static_cast<int>(held.size()), 3);
-    for (size_t r = 0; r < held.size(); ++r) a(r, held[r]) = 1.0 / options.joint_sigmas[b](held[r]);
-    joint_priors[b] = std::make_unique<ceres::NormalPrior>(a, ceres::Vector::Zero(3));
-  }
-  // (frame, imu) of each orientation residual, for the report.
-  std::vector<std::pair<int, int>> readings;
-  std::vector<Eigen::Matrix3d> reading_world;
-
-  for (size_t t = 0; t < frames.size(); ++t) {
-    InputCounts counts;
-    const CleanFrame clean = ValidateFrame(frames[t], rig, layout, imus, terms, &counts);
-    double* theta = result->thetas[t].data();
-    BodyPose start;
-    ForwardKinematics(skeleton, theta, &start);
-    if (terms.position.enabled) {
-      for (const Detection& d : clean.detections) {
-        const int bone = layout.sites[d.keypoint].bone;
-        const Eigen::Vector3d x = start.position[bone] + start.rotation[bone] * sites[d.keypoint];
-        Eigen::Vector2d pixel;
-        if (!rig.cameras[d.camera].Project(x, &pixel)) continue;
-        ScaledChain chain(&skeleton, bone, options.scale_group, options.shift_group);
-        std::vector<double*> blocks = ChainBlocks(skeleton, bone, theta);
-        blocks.push_back(sites[d.keypoint].data());
-        for (int g : chain.scale_groups()) blocks.push_back(&scales[g]);
-        for (int g : chain.shift_groups()) blocks.push_back(shifts[g].data());
-        costs.emplace_back(new SiteReprojectionResidual(chain, &rig.cameras[d.camera], d.pixel,
-                                                        d.confidence, terms.position.weight));
-        problem.AddResidualBlock(costs.back().get(), position_loss.get(), blocks);
-        ++result->keypoint_observations[d.keypoint];
-      }
-    }
-    if (terms.orientation.enabled) {
-      for (size_t i = 0; i < imus.size(); ++i) {
-        if (!clean.imu_world[i]) continue;
-        std::vector<double*> blocks = ChainBlocks(skeleton, imus[i].bone, theta);
-        blocks.push_back(mounts[i].data());
-        blocks.push_back(&headings[i]);
-        costs.emplace_back(new MountedOrientationResidual(
-            ScaledChain(&skeleton, imus[i].bone, no_groups), imus[i].mount, *clean.imu_world[i],
-            terms.orientation.weight));
-        problem.AddResidualBlock(costs.back().get(), orientation_loss.get(), blocks);
-        readings.emplace_back(static_cast<int>(t), static_cast<int>(i));
-        reading_world.push_back(*clean.imu_world[i]);
-      }
-    }
-    std::vector<double*> joints;
-    for (int b = 1; b < skeleton.num_bones(); ++b) joints.push_back(theta + BlockOffset(b));
-    for (int b = 1; b < skeleton.num_bones(); ++b) {
-      if (joint_priors[b])
-        problem.AddResidualBlock(joint_priors[b].get(), nullptr, theta + BlockOffset(b));
-    }
-    if (projection) problem.AddResidualBlock(projection.get(), nullptr, joints);
-    if (deviation) problem.AddResidualBlock(deviation.get(), nullptr, joints);
-  }
-  if (problem.NumResidualBlocks() == 0)
+  WindowProblem window(skeleton, rig, layout, imus, prior, options, &x);
+  for (size_t t = 0; t < frames.size(); ++t) window.AddFrame(frames[t], static_cast<int>(t));
+  if (window.problem().NumResidualBlocks() == 0)
     return Fail(error, "nothing in the calibration window could be used");
-
-  for (int k = 0; k < layout.size(); ++k) {
-    if (!problem.HasParameterBlock(sites[k].data())) continue;
-    costs.emplace_back(
-        GaussianPrior(sites0[k].data(), Eigen::Vector3d::Constant(options.site_sigma)));
-    problem.AddResidualBlock(costs.back().get(), nullptr, sites[k].data());
-    if (!options.estimate_sites) problem.SetParameterBlockConstant(sites[k].data());
-  }
-  const double one = 1.0;
-  for (double& s : scales) {
-    if (!problem.HasParameterBlock(&s)) continue;
-    costs.emplace_back(GaussianPrior(&one, Eigen::VectorXd::Constant(1, options.scale_sigma)));
-    problem.AddResidualBlock(costs.back().get(), nullptr, &s);
-    if (!options.estimate_scales) problem.SetParameterBlockConstant(&s);
-  }
-  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
-  for (size_t v = 0; v < shifts.size(); ++v) {
-    Eigen::Vector3d& d = shifts[v];
-    if (!problem.HasParameterBlock(d.data())) continue;
-    const Eigen::Vector3d sigma = v < options.shift_sigmas.size()
-                                      ? options.shift_sigmas[v]
-                                      : Eigen::Vector3d::Constant(options.shift_sigma);
-    costs.emplace_back(GaussianPrior(zero.data(), sigma));
-    problem.AddResidualBlock(costs.back().get(), nullptr, d.data());
-    if (!options.estimate_shifts) problem.SetParameterBlockConstant(d.data());
-  }
-  for (size_t i = 0; i < imus.size(); ++i) {
-    if (!problem.HasParameterBlock(mounts[i].data())) continue;
-    if (!options.estimate_mounts) problem.SetParameterBlockConstant(mounts[i].data());
-    if (!options.estimate_headings) problem.SetParameterBlockConstant(&headings[i]);
-  }
+  window.AddParameterPriors(sites0);
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
@@ -204,7 +301,7 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
   solver_options.num_threads = std::max(1, options.num_threads);
   solver_options.function_tolerance = 1e-7;
   ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
+  ceres::Solve(solver_options, &window.problem(), &summary);
   result->initial_cost = 2.0 * summary.initial_cost;
   result->final_cost = 2.0 * summary.final_cost;
   result->iterations = static_cast<int>(summary.iterations.size()) - 1;
@@ -212,43 +309,19 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
   result->message = summary.BriefReport();
   if (!summary.IsSolutionUsable()) return Fail(error, "calibration failed: " + summary.message);
 
-  std::vector<Skeleton::Bone> bones = skeleton.bones();
-  for (int b = 1; b < skeleton.num_bones(); ++b) {
-    // The offset as ScaledChain poses it: the rest pose's difference of bone origins.
-    ScaledChain one(&skeleton, b, options.scale_group, options.shift_group);
-    BodyPose rest;
-    std::vector<double> zeros(skeleton.pose_dim(), 0.0);
-    std::vector<const double*> theta_blocks, scale_ptrs, shift_ptrs;
-    for (int j : one.chain()) theta_blocks.push_back(zeros.data() + BlockOffset(j));
-    for (int g : one.scale_groups()) scale_ptrs.push_back(&scales[g]);
-    for (int g : one.shift_groups()) shift_ptrs.push_back(shifts[g].data());
-    one.Pose(theta_blocks.data(), scale_ptrs.data(), shift_ptrs.data(), &rest);
-    bones[b].offset = rest.position[b] - rest.position[skeleton.bone(b).parent];
-  }
-  if (!Skeleton::Create(std::move(bones), &result->skeleton, error)) return false;
-  result->scales = scales;
-  result->shifts = shifts;
+  if (!AdjustedSkeleton(skeleton, options, x, &result->skeleton, error)) return false;
+  result->thetas = x.thetas;
+  result->scales = x.scales;
+  result->shifts = x.shifts;
+  result->keypoint_observations = window.keypoint_observations();
   result->layout = layout;
-  for (int k = 0; k < layout.size(); ++k) result->layout.sites[k].offset = sites[k];
+  for (int k = 0; k < layout.size(); ++k) result->layout.sites[k].offset = x.sites[k];
   result->imus = imus;
   for (size_t i = 0; i < imus.size(); ++i) {
-    result->imus[i].mount = imus[i].mount * Exp(mounts[i]);
-    result->imus[i].reference = Exp(Eigen::Vector3d(0, 0, headings[i])) * imus[i].reference;
+    result->imus[i].mount = imus[i].mount * Exp(x.mounts[i]);
+    result->imus[i].reference = Exp(Eigen::Vector3d(0, 0, x.headings[i])) * imus[i].reference;
   }
-  std::vector<std::vector<double>> angles(imus.size());
-  BodyPose pose;
-  int last_frame = -1;
-  for (size_t r = 0; r < readings.size(); ++r) {
-    const auto [t, i] = readings[r];
-    if (t != last_frame) ForwardKinematics(result->skeleton, result->thetas[t].data(), &pose);
-    last_frame = t;
-    const Eigen::Matrix3d measured = Exp(Eigen::Vector3d(0, 0, headings[i])) * reading_world[r];
-    const int b = imus[i].bone;
-    angles[i].push_back(AngleBetween(measured, pose.rotation[b] * result->imus[i].mount) * 180 /
-                        M_PI);
-  }
-  result->imu_residual_deg.clear();
-  for (auto& a : angles) result->imu_residual_deg.push_back(MedianOf(a));
+  result->imu_residual_deg = ImuResidualsDeg(*result, x, window.readings());
   return true;
 }
 
