@@ -6,7 +6,10 @@ Camera frames are grouped by capture time (each camera's frame nearest a referen
 within half a frame period); the subject is chosen per camera as for take folders; IMU
 samples are taken per sensor (invalid readings dropped). The given session (by default the
 one attached to the recording) supplies the rig, the layout, the prior, the endpoints and
-the IMU set's names and bones; its skeleton and mountings are replaced. DIR receives
+the IMU set's names and bones; its skeleton and mountings are replaced. A sensor of the set
+that sent nothing usable in the recording is left out of the new IMU set (calibration.json
+lists it): mocapd then counts its samples as from an unknown source rather than trusting a
+mounting nobody measured. DIR receives
 session.json, skeleton.json, imus.json and calibration.json, and a copy of the session's rig,
 layout and prior files.
 """
@@ -30,7 +33,8 @@ INVALID_ORIENTATION, INVALID_ACCELERATION = 1, 2  # ImuSample.Status bits
 
 
 def _inputs(path: Path, camera_names: list[str]):
-    """Per camera [(capture_time_ns, (P, K, 3))], per sensor [(time_ns, q wxyz, a)], layout."""
+    """Per camera [(capture_time_ns, [(K, 3) per person])], per sensor [(time_ns, q wxyz, a)],
+    the keypoint layout."""
     cams, imus, layouts = defaultdict(list), defaultdict(list), set()
     for m in recording.read(path):
         if m.type_name == "mocap.v1.KeypointFrame":
@@ -38,8 +42,8 @@ def _inputs(path: Path, camera_names: list[str]):
             if f.camera_id not in camera_names or not f.detected:
                 continue
             layouts.add(f.keypoint_layout)
-            people = np.array([np.stack([p.x, p.y, p.confidence], axis=1) for p in f.persons if len(p.x)]
-                              ) if f.persons else np.zeros((0, 0, 3))
+            people = [np.stack([p.x, p.y, p.confidence], axis=1) for p in f.persons
+                      if len(p.x) == len(p.y) == len(p.confidence)]
             cams[f.camera_id].append((f.capture_time_ns, people))
         elif m.type_name == "mocap.v1.ImuBatch":
             for s in wire.ImuBatch.FromString(m.payload).samples:
@@ -61,8 +65,9 @@ def _frames(cams: dict, camera_names: list[str], k: int) -> tuple[np.ndarray, np
     for c, name in enumerate(camera_names):
         for t, persons in cams.get(name, []):
             f = int(np.argmin(np.abs(times - t)))
-            if abs(times[f] - t) <= half and persons.shape[1:] == (k, 3):
-                people[c][f] = persons
+            fitting = [p for p in persons if p.shape == (k, 3) and np.isfinite(p).all()]
+            if abs(times[f] - t) <= half and fitting:
+                people[c][f] = np.array(fitting)
     return times, choose_subject(people, len(times), k)
 
 

@@ -102,6 +102,18 @@ def test_pose2sims_balancing_trial_as_a_take_lands_near_its_own_3d(tmp_path):
     assert result["distance_cm"] < 4.5, result  # measured 3.6 (docs/results_real.md)
 
 
+def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated):
+    from mocap.calibration import window
+    from mocap.errors import InputError
+    from mocap.take_folder import read_take
+
+    take = read_take(simulated[0])
+    det = take_solve.subject(take)
+    det[:, 1:] = 0.0  # only the first camera saw anything
+    with pytest.raises(InputError, match="two cameras"):
+        window.estimate(take.rig, det, np.arange(take.n_frames) / take.frame_rate, take.layout, None)
+
+
 def test_solve_wants_exactly_one_input(tmp_path):
     for args in ([], ["--recording", "x.mcap", "--take", str(tmp_path)]):
         out = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", *args, "--out", str(tmp_path / "o")],

@@ -32,6 +32,7 @@ from mocap import _core, paths, prior, rotations
 from mocap.calibration import imu_position
 from mocap.calibration import imus as imu_calibration
 from mocap.calibration import skeleton as skeleton_estimate
+from mocap.errors import InputError
 from mocap.solver import Solver
 
 SECONDS = 5.0  # the window: the take's first seconds
@@ -156,6 +157,8 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         frames.append((float(times[f]), cams, detections[f, cams], list(range(n)), q, np.full((n, 3), np.nan)))
         starts.append(thetas[f])
         used.append(f)
+    if not frames:
+        raise InputError(f"no frame of the first {seconds:g} s is seen by two cameras: nothing to calibrate from")
     options = _core.CalibrationOptions()
     options.scale_group = group_indices(skel, LENGTH_GROUPS)
     options.shift_group = group_indices(skel, {g: bones for g, (bones, _) in SHIFT_GROUPS.items()})
@@ -163,7 +166,10 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     options.estimate_sites = estimate_sites
     options.scale_sigma = SCALE_SIGMA
     options.joint_sigmas = [np.array(JOINT_SIGMAS.get(b, (0.0, 0.0, 0.0))) for b in skel.bone_names]
-    result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
+    try:
+        result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
+    except ValueError as e:
+        raise InputError(f"calibration: {e}") from None
     report = {
         "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
         "iterations": result.iterations, "converged": result.converged,
