@@ -416,6 +416,11 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("pose", &Solver::pose)
       .def_property_readonly("initialised", &Solver::initialised);
 
+  py::class_<HeldPose>(m, "HeldPose")
+      .def(py::init<>())
+      .def_readwrite("frame", &HeldPose::frame)
+      .def_readwrite("theta", &HeldPose::theta)
+      .def_readwrite("sigma", &HeldPose::sigma);
   py::class_<CalibrationOptions>(m, "CalibrationOptions")
       .def(py::init<>())
       .def_readwrite("terms", &CalibrationOptions::terms)
@@ -425,6 +430,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("shift_sigma", &CalibrationOptions::shift_sigma)
       .def_readwrite("shift_sigmas", &CalibrationOptions::shift_sigmas)
       .def_readwrite("joint_sigmas", &CalibrationOptions::joint_sigmas)
+      .def_readwrite("held_poses", &CalibrationOptions::held_poses)
       .def_readwrite("estimate_shifts", &CalibrationOptions::estimate_shifts)
       .def_readwrite("site_sigma", &CalibrationOptions::site_sigma)
       .def_readwrite("estimate_scales", &CalibrationOptions::estimate_scales)

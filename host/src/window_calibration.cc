@@ -43,6 +43,12 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>&
   if (!options.joint_sigmas.empty() &&
       options.joint_sigmas.size() != static_cast<size_t>(skeleton.num_bones()))
     return Fail(error, "joint_sigmas needs one entry per bone (or none)");
+  for (const HeldPose& h : options.held_poses) {
+    if (h.frame < 0 || h.frame >= static_cast<int>(frames.size()) ||
+        h.theta.size() != skeleton.pose_dim() || !h.theta.allFinite() || !(h.sigma > 0))
+      return Fail(error,
+                  "a held pose needs a frame of the window, a finite pose and a positive sigma");
+  }
   for (const Eigen::Vector3d& sigma : options.shift_sigmas) {
     if (!(sigma.array() > 0).all() || !sigma.allFinite())
       return Fail(error, "shift_sigmas must be positive");
@@ -123,6 +129,16 @@ class WindowProblem {
     }
     if (projection_) problem_.AddResidualBlock(projection_.get(), nullptr, joints);
     if (deviation_) problem_.AddResidualBlock(deviation_.get(), nullptr, joints);
+  }
+
+  // A held pose: each joint's rotation near the pose's.
+  void AddHeldPose(const HeldPose& h) {
+    double* theta = x_->thetas[h.frame].data();
+    for (int b = 1; b < skeleton_.num_bones(); ++b) {
+      const int at = BlockOffset(b);
+      costs_.emplace_back(GaussianPrior(h.theta.data() + at, Eigen::Vector3d::Constant(h.sigma)));
+      problem_.AddResidualBlock(costs_.back().get(), nullptr, theta + at);
+    }
   }
 
   // The Gaussian priors on the sites, scales and shifts in the problem; held blocks.
@@ -291,6 +307,7 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
 
   WindowProblem window(skeleton, rig, layout, imus, prior, options, &x);
   for (size_t t = 0; t < frames.size(); ++t) window.AddFrame(frames[t], static_cast<int>(t));
+  for (const HeldPose& h : options.held_poses) window.AddHeldPose(h);
   if (window.problem().NumResidualBlocks() == 0)
     return Fail(error, "nothing in the calibration window could be used");
   window.AddParameterPriors(sites0);

@@ -135,6 +135,32 @@ TEST_F(WindowCalibrationTest, AKneeHingePinsTheLegMountingsTwist) {
   EXPECT_GT(leg_mount_error(free), 1.0 * kDeg);
 }
 
+TEST_F(WindowCalibrationTest, AHeldTPosePinsEveryMounting) {
+  // The first frames are the rest pose (a T-pose), held: tied to it, every mounting comes
+  // back whole; without it the limbs' twist stays where it started.
+  for (int t = 0; t < 3; ++t) {
+    thetas_[t].tail(thetas_[t].size() - 6).setZero();
+    frames_[t] = testing::Render(truth_, thetas_[t], 0.1 * t);
+  }
+  auto worst_mount = [&](const CalibrationResult& r) {
+    double worst = 0;
+    for (size_t i = 0; i < truth_.imus.size(); ++i)
+      worst = std::max(worst, AngleBetween(r.imus[i].mount, truth_.imus[i].mount));
+    return worst;
+  };
+  CalibrationResult free, held;
+  std::string error;
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &free, &error))
+      << error;
+  for (int t = 0; t < 3; ++t) options_.held_poses.push_back({t, thetas_[t], 0.01});
+  ASSERT_TRUE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                              frames_, starts_, options_, &held, &error))
+      << error;
+  EXPECT_LT(worst_mount(held), 0.1 * kDeg);
+  EXPECT_GT(worst_mount(free), 1.0 * kDeg);
+}
+
 TEST_F(WindowCalibrationTest, HeldParametersStayWhereTheyStart) {
   options_.estimate_headings = false;
   options_.estimate_scales = false;
@@ -171,6 +197,11 @@ TEST_F(WindowCalibrationTest, InconsistentInputsAreRefused) {
   EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
                                frames_, starts_, options_, &r, &error));
   EXPECT_NE(error.find("joint_sigmas"), std::string::npos) << error;
+  options_.joint_sigmas.clear();
+  options_.held_poses = {{static_cast<int>(frames_.size()), thetas_[0], 0.05}};
+  EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
+                               frames_, starts_, options_, &r, &error));
+  EXPECT_NE(error.find("held pose"), std::string::npos) << error;
   EXPECT_FALSE(CalibrateWindow(told_.skeleton, told_.rig, told_.layout, told_.imus, std::nullopt,
                                {}, {}, CalibrationOptions(), &r, &error));
   EXPECT_NE(error.find("no frames"), std::string::npos) << error;

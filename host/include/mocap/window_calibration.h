@@ -33,6 +33,16 @@
 
 namespace mocap {
 
+// A frame in which the subject is known to hold a pose (a T-pose or N-pose at the start of a
+// take): each joint's rotation relative to its parent costs |theta_b - pose_b| / sigma. The
+// root is left free (the subject faces any way). A held calibration pose defines the bone
+// frames the way a suit's calibration does, and so pins the mountings' twist.
+struct HeldPose {
+  int frame = 0;          // index into the window's frames
+  Eigen::VectorXd theta;  // pose_dim; only the joints' entries are used
+  double sigma = 0.05;    // rad
+};
+
 struct CalibrationOptions {
   SolverOptions terms;           // E_R, E_P, E_PP, E_PD weights and losses; thresholds
   std::vector<int> scale_group;  // per bone: its length group, -1 for none (may be empty)
@@ -49,6 +59,7 @@ struct CalibrationOptions {
   // elbow without axial twist, pin the twist of the limbs' frames and so of their IMUs'
   // mountings, which video does not see.
   std::vector<Eigen::Vector3d> joint_sigmas;
+  std::vector<HeldPose> held_poses;
   double site_sigma = 0.03;  // m, prior on each keypoint site around the layout's
   bool estimate_scales = true, estimate_shifts = true, estimate_sites = true,
        estimate_mounts = true, estimate_headings = true;
