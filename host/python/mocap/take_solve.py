@@ -132,7 +132,9 @@ def _markdown(r: dict) -> str:
         "| group | scale | measured | distances |", "|---|---|---|---|", rows, "",
         f"Window calibration ({w['frames']} frames of the first {w['window_s']:.1f} s, {w['iterations']} iterations, "
         f"cost {w['cost']['start']:.0f} -> {w['cost']['end']:.0f}):",
-        f"lengths {refined}; shifts {shifts}. Keypoint sites: {'estimated' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}.", ""]
+        f"lengths {refined}; shifts {shifts}. Keypoint sites: {'estimated' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}.",
+        f"Calibration pose: {w['calibration_pose'] + '-pose held, ' + str(w['calibration_pose_frames']) + ' frames' if w['calibration_pose'] else 'none found'}.",
+        ""]
     if w["imus"]:
         lines += ["| sensor | bone | heading (deg) | start residual (deg) | residual (deg) | offset (cm) | position |",
                   "|---|---|---|---|---|---|---|", imus, ""]

@@ -8,8 +8,8 @@ each IMU's mounting and heading, for the fused solve that follows.
 4. The window calibration (host C++, window_calibration.h): the poses of every `step`-th
    frame seen by two cameras or more, the bone offsets (LENGTH_GROUPS, SHIFT_GROUPS), the
    mountings and the headings solved together (E_P, E_R with the unknown mountings and
-   headings, the PCA prior); when the take starts with a held T-pose (t_pose_frames), those
-   frames' joints are tied to the rest pose, which pins the mountings' twist.
+   headings, the PCA prior); when the take starts with a held T-pose or N-pose
+   (held_pose_frames), those frames' joints are tied to it, which pins the mountings' twist.
 5. Each IMU's position on its segment from its accelerometer (mocap.calibration.imu_position)
    against a solve of the window with steps 1-4 (E_A off); when detections are sparse (HS)
    the positions stay at the strap's usual place.
@@ -115,26 +115,46 @@ SHIFT_GROUPS = {"hips": (["thigh_l", "thigh_r"], (0.02, 0.02, 0.001)),
 JOINT_SIGMAS: dict[str, tuple[float, float, float]] = {}
 
 
-# A calibration pose at the start: our rest pose is a T-pose, so a stretch of frames where the
-# video-only solve holds every limb and spine segment's direction (what video sees, not the
-# twist) within HELD_MAX_DEG of the rest pose's, facing turned away, and turns it by less
-# than HELD_STILL_DEG in 0.5 s (means over +-0.25 s: per-frame solves jitter), for HELD_MIN_S or longer, is taken as the subject holding a
-# T-pose; those frames' joints are then tied to it (HELD_SIGMA), which defines the bone
-# frames as a suit's calibration pose does and pins the mountings' twist.
+# A calibration pose at the start, as suits ask for: a T-pose (our rest pose) or an N-pose
+# (standing, arms hanging). A stretch of frames where the video-only solve holds every limb
+# and spine segment's direction (what video sees, not the twist) within HELD_MAX_DEG of the
+# pose's, the subject's facing turned away, and turns it by less than HELD_STILL_DEG in 0.5 s
+# (means over +-0.25 s: per-frame solves jitter), for HELD_MIN_S or longer, is taken as the
+# subject holding it; those frames' joints are then tied to the pose (HELD_SIGMA), which
+# defines the bone frames as a suit's calibration does and pins the mountings' twist.
 HELD_BONES = ["spine_lower", "spine_upper", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r",
               "thigh_l", "thigh_r", "shin_l", "shin_r"]
 HELD_MAX_DEG, HELD_STILL_DEG, HELD_MIN_S, HELD_SIGMA = 20.0, 2.0, 0.5, 0.01
 
 
-def t_pose_frames(skeleton: _core.Skeleton, thetas: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Indices of the longest run of frames held still in a T-pose (empty: none)."""
+def calibration_poses(skeleton: _core.Skeleton) -> dict[str, np.ndarray]:
+    """The poses recognised: "T" (the rest pose) and "N" (the upper arms turned down)."""
+    n_pose = np.zeros(skeleton.pose_dim)
+    n_pose[3 + 3 * skeleton.bone_names.index("upper_arm_l")] = -np.pi / 2
+    n_pose[3 + 3 * skeleton.bone_names.index("upper_arm_r")] = np.pi / 2
+    return {"T": np.zeros(skeleton.pose_dim), "N": n_pose}
+
+
+def held_pose_frames(skeleton: _core.Skeleton, thetas: np.ndarray, times: np.ndarray) -> tuple[str | None, np.ndarray]:
+    """The calibration pose held longest ("T" or "N", None) and its frames."""
+    best = (None, np.array([], int))
+    for name, pose in calibration_poses(skeleton).items():
+        frames = _held_frames(skeleton, pose, thetas, times)
+        if len(frames) > len(best[1]):
+            best = (name, frames)
+    return best
+
+
+def _held_frames(skeleton: _core.Skeleton, pose: np.ndarray, thetas: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Indices of the longest run of frames held still in `pose` (empty: none)."""
     bones = [skeleton.bone_names.index(b) for b in HELD_BONES]
     children = [next(c for c, p in enumerate(skeleton.parents) if p == b) for b in bones]
-    rest = np.array([skeleton.offsets[c] / np.linalg.norm(skeleton.offsets[c]) for c in children])
+    axes = np.array([skeleton.offsets[c] / np.linalg.norm(skeleton.offsets[c]) for c in children])
+    target = np.einsum("bjk,bk->bj", skeleton.forward_kinematics(pose)[0][bones], axes)  # facing +x
     world, yaws = [], []
     for theta in thetas:
         rot, _ = skeleton.forward_kinematics(theta)
-        world.append(np.einsum("bjk,bk->bj", rot[bones], rest))
+        world.append(np.einsum("bjk,bk->bj", rot[bones], axes))
         yaws.append(np.arctan2(rot[0][1, 0], rot[0][0, 0]))  # the subject's facing, from the pelvis
     world = np.array(world)  # (F, bones, 3)
     yaws = np.unwrap(yaws)
@@ -145,7 +165,7 @@ def t_pose_frames(skeleton: _core.Skeleton, thetas: np.ndarray, times: np.ndarra
     yaws = np.array([np.median(yaws[max(0, f - half): f + half + 1]) for f in range(len(yaws))])
     facing = np.einsum("fij,fbj->fbi", rotations.exp(np.stack([np.zeros_like(yaws)] * 2 + [-yaws], axis=1)), mean)
     angle = lambda a, b: np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)))  # noqa: E731
-    near = angle(facing, rest[None]).max(axis=1) <= HELD_MAX_DEG
+    near = angle(facing, target[None]).max(axis=1) <= HELD_MAX_DEG
     before, after = np.roll(mean, half, axis=0), np.roll(mean, -half, axis=0)  # the means a half-window away
     still = angle(before, after).max(axis=1) <= HELD_STILL_DEG
     still[:half] = still[-half:] = False
@@ -174,7 +194,7 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
 
 def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
              readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
-             estimate_sites: bool = False, use_t_pose: bool = True) -> Calibration:
+             estimate_sites: bool = False, use_held_pose: bool = True) -> Calibration:
     """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings."""
     window = int(np.searchsorted(times, times[0] + seconds))
     window = max(window, 1)
@@ -200,7 +220,8 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     frames, starts, used = [], [], []
     seen_by = (detections[:window, :, :, 2] > 0).any(axis=2).sum(axis=1)  # cameras per frame
     seen = np.flatnonzero(seen_by >= 2)  # frames between detections add nothing
-    held = set(t_pose_frames(skel, thetas, times[:window]).tolist()) if use_t_pose else set()
+    pose_name, held_frames = held_pose_frames(skel, thetas, times[:window]) if use_held_pose else (None, [])
+    held = set(np.asarray(held_frames).tolist())
     for f in sorted(set(seen[::step].tolist()) | (held & set(seen.tolist()))):  # every held frame
         cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
         n = len(sites)
@@ -217,7 +238,8 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     options.estimate_sites = estimate_sites
     options.scale_sigma = SCALE_SIGMA
     options.joint_sigmas = [np.array(JOINT_SIGMAS.get(b, (0.0, 0.0, 0.0))) for b in skel.bone_names]
-    options.held_poses = [_held(j, skel.pose_dim) for j, f in enumerate(used) if f in held]
+    pose = calibration_poses(skel).get(pose_name)
+    options.held_poses = [_held(j, pose) for j, f in enumerate(used) if f in held]
     try:
         result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
     except ValueError as e:
@@ -230,7 +252,7 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         "scales_window": dict(zip(LENGTH_GROUPS, (float(s) for s in result.scales))),  # step 4, of step 1's
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
         "sites_estimated": estimate_sites,
-        "t_pose_frames": len(options.held_poses),
+        "calibration_pose": pose_name, "calibration_pose_frames": len(options.held_poses),
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
                           "mount": rotations.log(np.asarray(s.mount)).tolist()}
@@ -242,9 +264,9 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     return Calibration(result.skeleton, result.layout, imus, start, report, np.array(used), np.array(result.thetas))
 
 
-def _held(frame: int, dim: int) -> _core.HeldPose:
+def _held(frame: int, pose: np.ndarray) -> _core.HeldPose:
     h = _core.HeldPose()
-    h.frame, h.theta, h.sigma = frame, np.zeros(dim), HELD_SIGMA
+    h.frame, h.theta, h.sigma = frame, pose, HELD_SIGMA
     return h
 
 
