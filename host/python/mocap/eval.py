@@ -123,14 +123,15 @@ def floor_cm(t: sim_take.Take) -> float:
     return 100 * float(np.mean(errs)) if errs else float("nan")
 
 
-def estimate_calibration(t: sim_take.Take) -> window.Calibration:
-    """The take's calibration from its own first seconds (mocap.calibration.window): nothing of
-    the truth is used (the IMU readings' reference frames are treated as unknown too)."""
+def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
+    """The take's calibration from its own first seconds (mocap.calibration.window, with its
+    keyword options): nothing of the truth is used (the IMU readings' reference frames are
+    treated as unknown too)."""
     cams, k = len(t.rig.cameras), len(t.layout)
     det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
     readings = window.ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions,
                                   t.accelerations)
-    return window.estimate(t.rig, det, t.times, t.layout.name, readings)
+    return window.estimate(t.rig, det, t.times, t.layout.name, readings, **options)
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),

@@ -28,10 +28,7 @@ def take():
 
 
 def calibrated(t, use_held_pose: bool):
-    c = window.estimate(t.rig, np.array([k if k is not None else np.zeros((8, 33, 3)) for k in t.keypoints]),
-                        t.times, t.layout.name,
-                        window.ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions,
-                                           t.accelerations), use_held_pose=use_held_pose)
+    c = evaluation.estimate_calibration(t, use_held_pose=use_held_pose)
     solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
     errors = evaluation.errors(t.skeleton, t.thetas, solved, 1 / 60, c.skeleton)
     mounts = [e["mount_deg"] for e in evaluation.calibration_errors(t, c)["imus"].values()]
