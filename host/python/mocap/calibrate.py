@@ -27,7 +27,8 @@ import numpy as np
 from mocap import _core, recording, wire
 from mocap.calibration import window
 from mocap.errors import InputError
-from mocap.take_solve import LAYOUT_SIZES, choose_subject, imu_sites_json
+from mocap.solver import imu_set_json
+from mocap.take_solve import LAYOUT_SIZES, choose_subject
 
 INVALID_ORIENTATION, INVALID_ACCELERATION = 1, 2  # ImuSample.Status bits
 
@@ -109,7 +110,7 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
         cal = window.estimate(rig, det[keep], frame_times, layout, readings, seconds=seconds)
         out.mkdir(parents=True, exist_ok=True)
         (out / "skeleton.json").write_text(cal.skeleton.to_json())
-        (out / "imus.json").write_text(json.dumps(imu_sites_json(cal), indent=1))
+        (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
         report = {"recording": str(recording_path), "session": str(session), "frames": int(keep.sum()),
                   "imus_calibrated": [s[0] for s in sensors],
                   "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],

@@ -19,10 +19,11 @@ from pathlib import Path
 import numpy as np
 import zmq
 
-from mocap import _core, demo_motion, paths, recording, rotations, transport, wire
+from mocap import _core, demo_motion, paths, recording, transport, wire
 from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
+from mocap.solver import imu_set_json
 from mocap_edge.streams import Streams
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
@@ -66,14 +67,6 @@ def free_ports(n: int) -> list[int]:
     return ports
 
 
-def _imus_json(skeleton: _core.Skeleton, imus) -> dict:
-    names = skeleton.bone_names
-    return {"format": "mocap.imus/1", "imus": [
-        {"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
-         "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
-        for s in imus]}
-
-
 def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0,
             calibration: str = "estimated") -> Studio:
     """Simulates `seconds` of the demo motion and writes the session (skeleton, told rig,
@@ -111,7 +104,7 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
         raise InputError(f"calibration is 'estimated' or 'oracle', not {calibration!r}")
     (folder / "skeleton.json").write_text(session_skeleton.to_json())
     (folder / "rig.json").write_text(t.rig.to_json())
-    (folder / "imus.json").write_text(json.dumps(_imus_json(session_skeleton, imus), indent=1))
+    (folder / "imus.json").write_text(json.dumps(imu_set_json(session_skeleton, imus), indent=1))
     session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
                "layout": str(paths.LAYOUTS / f"{t.layout.name}.json"), "prior": str(paths.HOST_DATA / "prior_default.json"),
                "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from mocap import _core, prior
+import numpy as np
+
+from mocap import _core, prior, rotations
 from mocap.errors import InputError
 
 _DEFAULT = object()
@@ -15,6 +17,15 @@ class Solver(_core.Solver):
     def __init__(self, skeleton, rig, layout, imus, prior_model=_DEFAULT, options=None):
         model = prior.load() if prior_model is _DEFAULT else prior_model
         super().__init__(skeleton, rig, layout, imus, model, options or _core.SolverOptions())
+
+
+def imu_set_json(skeleton: _core.Skeleton, imus) -> dict:
+    """IMU sites in the solver's IMU set format (mocap.imus/1, sites.h)."""
+    names = skeleton.bone_names
+    return {"format": "mocap.imus/1", "imus": [
+        {"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
+         "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
+        for s in imus]}
 
 
 def solver_options(settings: list[str]) -> _core.SolverOptions:

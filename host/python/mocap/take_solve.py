@@ -17,12 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths, rotations
+from mocap import _core, paths
 from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
 from mocap.joint_centres import JOINTS, bone_indices
-from mocap.solver import Solver
+from mocap.solver import Solver, imu_set_json
 from mocap.take_folder import TakeFolder, read_take
 from mocap_edge.detect.openpose_json import box_size
 
@@ -66,40 +66,22 @@ def solve_take(folder: Path, out: Path) -> dict:
     readings = window.readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
                                           for m in take.imus]) if take.imus else None
     cal = window.estimate(take.rig, det, times, take.layout, readings)
-    solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus)
-    n = len(cal.imus)
-    thetas, statuses = [], []
-    for f in range(take.n_frames):
-        cams = [c for c in range(det.shape[1]) if (det[f, c, :, 2] > 0).any()]
-        q = readings.quaternions[f] if readings else np.zeros((0, 4))
-        a = readings.accelerations[f] if readings else np.zeros((0, 3))
-        r = solver.solve(float(times[f]), cams, det[f, cams], list(range(n)), q, a)
-        thetas.append(np.array(r.theta))
-        statuses.append(str(r.status))
-    thetas = np.array(thetas)
+    thetas, statuses = window.solve_frames(Solver(cal.skeleton, take.rig, cal.layout, cal.imus), det, times,
+                                           readings)
     out.mkdir(parents=True, exist_ok=True)
     _write_joints(out / "joints.csv", cal.skeleton, thetas, take)
     write_bvh(out / "take.bvh", cal.skeleton, thetas, take.frame_rate)
     start = cal.skeleton_start
     report = {"frames": take.n_frames, "frame_rate": take.frame_rate, "cameras": len(take.rig.cameras),
-              "layout": take.layout, "imus_used": n,
+              "layout": take.layout, "imus_used": len(cal.imus),
               "skeleton": {"from_frames": int(np.searchsorted(times, window.SECONDS)), "scales": start.scales,
                            "lengths_m": start.lengths_m, "frames_per_length": start.frames},
               "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)}}}
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
     (out / "skeleton.json").write_text(cal.skeleton.to_json())
-    (out / "imus.json").write_text(json.dumps(imu_sites_json(cal), indent=1))
+    (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
     (out / "calibration.md").write_text(_markdown(report))
     return report
-
-
-def imu_sites_json(cal: window.Calibration) -> dict:
-    """The estimated IMU sites in the solver's IMU set format (mocap.imus/1, sites.h)."""
-    names = cal.skeleton.bone_names
-    return {"format": "mocap.imus/1",
-            "imus": [{"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
-                      "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
-                     for s in cal.imus]}
 
 
 def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: TakeFolder) -> None:

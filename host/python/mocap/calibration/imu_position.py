@@ -49,7 +49,7 @@ def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
     return out.reshape((len(out),) + x.shape[1:])
 
 
-def _longest_run(ok: np.ndarray) -> tuple[int, int]:
+def longest_run(ok: np.ndarray) -> tuple[int, int]:
     """[lo, hi) of the longest run of True."""
     best, start = (0, 0), None
     for i, v in enumerate(np.append(ok, False)):
@@ -72,7 +72,7 @@ def estimate(skeleton: _core.Skeleton, site: _core.ImuSite, thetas: np.ndarray, 
     accelerations (T, 3) sensor frame."""
     prior = usual_place(skeleton, site.bone)
     ok = np.isfinite(quaternions).all(axis=1) & np.isfinite(accelerations).all(axis=1) & np.isfinite(thetas).all(axis=1)
-    lo, hi = _longest_run(ok)  # the filter needs an unbroken run
+    lo, hi = longest_run(ok)  # the filter needs an unbroken run
     if hi - lo < MIN_FRAMES:
         return ImuPosition(prior, 0, float("nan"))
     thetas, times, quaternions, accelerations = thetas[lo:hi], times[lo:hi], quaternions[lo:hi], accelerations[lo:hi]

@@ -75,14 +75,21 @@ class Calibration:
     window_thetas: np.ndarray  # (W, 66) their poses, with the estimated skeleton
 
 
-def _video_only(skeleton, rig, layout, detections, times) -> np.ndarray:
-    solver = Solver(skeleton, rig, layout, [])
-    out = []
+def solve_frames(solver: Solver, detections: np.ndarray, times: np.ndarray, readings: ImuReadings | None,
+                 accelerations: bool = True) -> tuple[np.ndarray, list[str]]:
+    """(F, 66) poses and statuses of frames solved in turn: detections (F, C, K, 3) of the
+    cameras that saw the subject, and, when given, the readings of every IMU of the solver
+    (accelerations=False: orientations only)."""
+    thetas, statuses = [], []
+    n = len(readings.names) if readings else 0
     for f in range(len(detections)):
         cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
-        r = solver.solve(float(times[f]), cams, detections[f, cams], [], np.zeros((0, 4)), np.zeros((0, 3)))
-        out.append(np.array(r.theta))
-    return np.array(out)
+        q = readings.quaternions[f] if readings else np.zeros((0, 4))
+        a = readings.accelerations[f] if readings and accelerations else np.full((n, 3), np.nan)
+        r = solver.solve(float(times[f]), cams, detections[f, cams], list(range(n)), q, a)
+        thetas.append(np.array(r.theta))
+        statuses.append(str(r.status))
+    return np.array(thetas), statuses
 
 
 # The window's length groups (a scale of the offsets) and shift groups (a change of the
@@ -137,20 +144,9 @@ def calibration_poses(skeleton: _core.Skeleton) -> dict[str, np.ndarray]:
 
 def held_pose_frames(skeleton: _core.Skeleton, thetas: np.ndarray, times: np.ndarray) -> tuple[str | None, np.ndarray]:
     """The calibration pose held longest ("T" or "N", None) and its frames."""
-    best = (None, np.array([], int))
-    for name, pose in calibration_poses(skeleton).items():
-        frames = _held_frames(skeleton, pose, thetas, times)
-        if len(frames) > len(best[1]):
-            best = (name, frames)
-    return best
-
-
-def _held_frames(skeleton: _core.Skeleton, pose: np.ndarray, thetas: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Indices of the longest run of frames held still in `pose` (empty: none)."""
     bones = [skeleton.bone_names.index(b) for b in HELD_BONES]
     children = [next(c for c, p in enumerate(skeleton.parents) if p == b) for b in bones]
     axes = np.array([skeleton.offsets[c] / np.linalg.norm(skeleton.offsets[c]) for c in children])
-    target = np.einsum("bjk,bk->bj", skeleton.forward_kinematics(pose)[0][bones], axes)  # facing +x
     world, yaws = [], []
     for theta in thetas:
         rot, _ = skeleton.forward_kinematics(theta)
@@ -159,28 +155,25 @@ def _held_frames(skeleton: _core.Skeleton, pose: np.ndarray, thetas: np.ndarray,
     world = np.array(world)  # (F, bones, 3)
     yaws = np.unwrap(yaws)
     half = max(1, int(round(0.25 / max(float(np.median(np.diff(times))), 1e-3)))) if len(times) > 1 else 1
-    # Per-frame video solves jitter by degrees: the test is on means over +-0.25 s.
+    # Per-frame video solves jitter by degrees: the tests are on means over +-0.25 s.
     mean = np.array([world[max(0, f - half): f + half + 1].mean(axis=0) for f in range(len(world))])
     mean /= np.linalg.norm(mean, axis=-1, keepdims=True)
     yaws = np.array([np.median(yaws[max(0, f - half): f + half + 1]) for f in range(len(yaws))])
     facing = np.einsum("fij,fbj->fbi", rotations.exp(np.stack([np.zeros_like(yaws)] * 2 + [-yaws], axis=1)), mean)
     angle = lambda a, b: np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)))  # noqa: E731
-    near = angle(facing, target[None]).max(axis=1) <= HELD_MAX_DEG
     before, after = np.roll(mean, half, axis=0), np.roll(mean, -half, axis=0)  # the means a half-window away
     still = angle(before, after).max(axis=1) <= HELD_STILL_DEG
     still[:half] = still[-half:] = False
-    ok = near & still
-    best, start = (0, 0), None
-    for i, v in enumerate(np.append(ok, False)):
-        if v and start is None:
-            start = i
-        elif not v and start is not None:
-            best, start = max(best, (start, i), key=lambda r: r[1] - r[0]), None
-    lo, hi = best
-    if hi <= lo:
-        return np.array([], int)
-    lo, hi = max(0, lo - half), min(len(times), hi + half)  # the frames the means held still cover
-    return np.arange(lo, hi) if times[hi - 1] - times[lo] >= HELD_MIN_S else np.array([], int)
+    best = (None, np.array([], int))
+    for name, pose in calibration_poses(skeleton).items():
+        target = np.einsum("bjk,bk->bj", skeleton.forward_kinematics(pose)[0][bones], axes)  # facing +x
+        lo, hi = imu_position.longest_run(still & (angle(facing, target[None]).max(axis=1) <= HELD_MAX_DEG))
+        if hi <= lo:
+            continue
+        lo, hi = max(0, lo - half), min(len(times), hi + half)  # the frames the means held still cover
+        if times[hi - 1] - times[lo] >= HELD_MIN_S and hi - lo > len(best[1]):
+            best = (name, np.arange(lo, hi))
+    return best
 
 
 def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> list[int]:
@@ -201,7 +194,7 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     start = skeleton_estimate.estimate(rig, detections[:window], layout_name)
     skel = start.skeleton
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{layout_name}.json"), skel).scaled_to(skel)
-    thetas = _video_only(skel, rig, layout, detections[:window], times[:window])
+    thetas, _ = solve_frames(Solver(skel, rig, layout, []), detections[:window], times[:window], None)
     sites, first = [], []
     bone_world = np.array([skel.forward_kinematics(t)[0] for t in thetas])
     for i, name in enumerate(readings.names if readings else []):
@@ -280,17 +273,11 @@ def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuR
         return {s.name: {"offset_m": np.asarray(s.offset).tolist(), "estimated": False, "why": why} for s in imus}
     options = _core.SolverOptions()
     options.acceleration.enabled = False
-    solver = Solver(skel, rig, layout, imus, options=options)
-    n = len(imus)
-    thetas = []
-    for f in range(len(detections)):
-        cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
-        r = solver.solve(float(times[f]), cams, detections[f, cams], list(range(n)), readings.quaternions[f],
-                         np.full((n, 3), np.nan))
-        thetas.append(np.array(r.theta))
+    thetas, _ = solve_frames(Solver(skel, rig, layout, imus, options=options), detections, times, readings,
+                             accelerations=False)
     out = {}
     for i, s in enumerate(imus):
-        placed = imu_position.estimate(skel, s, np.array(thetas), times, readings.quaternions[: len(times), i],
+        placed = imu_position.estimate(skel, s, thetas, times, readings.quaternions[: len(times), i],
                                        readings.accelerations[: len(times), i])
         s.offset = placed.offset
         out[s.name] = {"offset_m": placed.offset.tolist(), "estimated": placed.frames > 0, "frames": placed.frames,
