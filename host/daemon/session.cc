@@ -36,6 +36,8 @@ bool ReadSolver(const json& j, SolverOptions* options, std::string* error) {
       options->velocity_gain = value.get<double>();
     else if (key == "max_keypoint_cost")
       options->max_keypoint_cost = value.get<double>();
+    else if (key == "heading_time_constant")
+      options->heading_time_constant = value.get<double>();
     else
       return *error = "unknown solver option '" + key + "'", false;
   }

@@ -327,6 +327,8 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("max_history_gap", &SolverOptions::max_history_gap)
       .def_readwrite("velocity_gain", &SolverOptions::velocity_gain)
       .def_readwrite("max_keypoint_cost", &SolverOptions::max_keypoint_cost)
+      .def_readwrite("heading_time_constant", &SolverOptions::heading_time_constant)
+      .def_readwrite("max_heading_step", &SolverOptions::max_heading_step)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations)
       .def_readwrite("max_initial_iterations", &SolverOptions::max_initial_iterations)
       .def_readwrite("function_tolerance", &SolverOptions::function_tolerance)
@@ -414,6 +416,8 @@ PYBIND11_MODULE(_core, m) {
           "Replace the options from the next frame on (ValueError when out of range).")
       .def("set_warm_start", &Solver::SetWarmStart)
       .def_property_readonly("pose", &Solver::pose)
+      .def_property_readonly("headings", &Solver::headings,
+                             "heading corrections psi_i (rad about world z), one per IMU site")
       .def_property_readonly("initialised", &Solver::initialised);
 
   py::class_<HeldPose>(m, "HeldPose")

@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -74,8 +75,10 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!accel_at_rest.allFinite() || !(min_confidence >= 0.0 && min_confidence < 1.0) ||
       !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) ||
       !(velocity_gain > 0.0 && velocity_gain <= 1.0) || !(max_keypoint_cost > 0.0) ||
-      max_iterations < 1 || max_initial_iterations < 1 || !(function_tolerance >= 0.0) ||
-      !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0)) {
+      !(heading_time_constant >= 0.0 && std::isfinite(heading_time_constant)) ||
+      !(max_heading_step > 0.0 && max_heading_step <= M_PI) || max_iterations < 1 ||
+      max_initial_iterations < 1 || !(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
+      !(parameter_tolerance >= 0.0)) {
     *error = "solver options out of range";
     return false;
   }
@@ -120,6 +123,7 @@ std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayou
   s->imus_ = std::move(imus);
   s->prior_ = std::move(prior);
   s->options_ = options;
+  s->headings_.assign(s->imus_.size(), 0.0);
   s->Reset();
   return s;
 }
@@ -130,6 +134,7 @@ void Solver::Reset() {
   history_.clear();
   motion_.reset();
   last_fix_.reset();
+  last_heading_update_.reset();  // the corrections themselves are calibration: kept
 }
 
 bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
@@ -235,6 +240,29 @@ void Solver::Remember(const CleanFrame& frame, bool position_constrained, Contin
   if (position_constrained) last_fix_ = frame.timestamp;
 }
 
+void Solver::TrackHeadings(const CleanFrame& frame) {
+  const double dt = last_heading_update_ ? std::min(frame.timestamp - *last_heading_update_,
+                                                    options_.max_history_gap)
+                                         : 0.0;
+  last_heading_update_ = frame.timestamp;
+  if (options_.heading_time_constant <= 0.0 || dt <= 0.0) return;
+  const double gain = std::min(1.0, dt / options_.heading_time_constant);
+  BodyPose pose;
+  ForwardKinematics(skeleton_, theta_.data(), &pose);
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (!frame.imu_world[i]) continue;
+    // The world-frame turn from the measured sensor orientation to the solved one; its
+    // twist about z is the heading's error.
+    const Eigen::Quaterniond q(pose.rotation[imus_[i].bone] * imus_[i].mount *
+                               frame.imu_world[i]->transpose());
+    double yaw = 2.0 * std::atan2(q.z(), q.w());
+    if (yaw > M_PI) yaw -= 2.0 * M_PI;
+    if (yaw < -M_PI) yaw += 2.0 * M_PI;
+    yaw = std::clamp(yaw, -options_.max_heading_step, options_.max_heading_step);
+    headings_[i] = std::remainder(headings_[i] + gain * yaw, 2.0 * M_PI);
+  }
+}
+
 void Solver::UpdatePriorResiduals() {
   if (!prior_) return;
   if (prior_->rank() < prior_->dof() && options_.pca_projection.weight != pca_projection_weight_) {
@@ -323,7 +351,16 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     return finish(SolveStatus::kRejectedFrame,
                   "timestamp not finite or not after the previous frame");
   }
-  const CleanFrame clean = ValidateFrame(frame, rig_, layout_, imus_, options_, &result.counts);
+  CleanFrame clean = ValidateFrame(frame, rig_, layout_, imus_, options_, &result.counts);
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (headings_[i] == 0.0 || !clean.imu_world[i]) continue;
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(headings_[i], Eigen::Vector3d::UnitZ()).matrix();
+    clean.imu_world[i] = turn * *clean.imu_world[i];
+    if (clean.accel_world[i]) {
+      const Eigen::Vector3d& g = options_.accel_at_rest;
+      clean.accel_world[i] = turn * (*clean.accel_world[i] + g) - g;
+    }
+  }
   int orientations = 0;
   for (const auto& o : clean.imu_world) orientations += o.has_value();
   if (clean.detections.empty() && orientations == 0) {
@@ -380,6 +417,11 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   theta_ = x;
   initialised_ = true;
   Remember(clean, !(result.flags & kPositionUnconstrained), continuity);
+  // Only a tracked pose the keypoints hold tells the headings anything.
+  if (continuity == Continuity::kContinuous && !initialising &&
+      !(result.flags & kPositionUnconstrained)) {
+    TrackHeadings(clean);
+  }
   return finish(initialising ? SolveStatus::kInitialised : SolveStatus::kOk, "");
 }
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/QR>
 #include <cmath>
+#include <stdexcept>
 
 #include "mocap/so3.h"
 
@@ -172,6 +173,7 @@ PosePrior PriorThrough(const std::vector<Eigen::VectorXd>& poses, int rank, std:
   const int dof = static_cast<int>(poses.back().size()) - 6;
   const Eigen::VectorXd mean = poses.back().tail(dof);
   const int spanned = static_cast<int>(poses.size()) - 1;
+  if (spanned >= rank) throw std::invalid_argument("PriorThrough: more poses than the rank spans");
   Eigen::MatrixXd g(dof, rank);
   for (int i = 0; i < g.size(); ++i) g(i) = n(*rng);
   for (int c = 0; c < spanned; ++c) g.col(c) = poses[c].tail(dof) - mean;

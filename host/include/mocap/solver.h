@@ -62,6 +62,14 @@ struct SolverOptions {
   // Warm start from a constant-velocity prediction of the two previous solutions (on
   // SO(3) per joint) instead of the previous solution alone.
   bool predict_motion = true;
+  // Heading tracking (0: off): each IMU's reference frame is turned about world z by a
+  // heading correction psi_i that follows, with this time constant (s), the yaw between the
+  // solved sensor orientation and the measured one on frames the keypoints constrain. Video
+  // sees a segment's yaw (a limb's when it is not vertical, the pelvis' through the hips), so
+  // a heading estimated from a short window, or drifting as magnetometers do indoors, is
+  // pulled to what the cameras see; a yaw video does not see leaves psi_i where it is.
+  double heading_time_constant = 0.0;
+  double max_heading_step = 0.1;     // rad: a frame's yaw beyond this counts as this much
   int max_iterations = 10;           // per warm-started frame
   int max_initial_iterations = 100;  // for the first frame
   // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
@@ -103,6 +111,9 @@ class Solver {
   const Rig& rig() const { return rig_; }
   const KeypointLayout& layout() const { return layout_; }
   const std::vector<ImuSite>& imus() const { return imus_; }
+  // The heading corrections psi_i (rad, about world z), one per IMU site: the reference in
+  // use is Rz(psi_i) * imus()[i].reference.
+  const std::vector<double>& headings() const { return headings_; }
   const SolverOptions& options() const { return options_; }
   // Replaces the options (weights, losses, tolerances) from the next frame on; false and
   // *error set, options unchanged, when they are out of range.
@@ -143,6 +154,8 @@ class Solver {
   void Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity);
   // (Re)builds the prior terms' constant matrices when their weights changed.
   void UpdatePriorResiduals();
+  // Moves the heading corrections towards the solved pose's (heading_time_constant).
+  void TrackHeadings(const CleanFrame& frame);
   // The warm start of a frame at `timestamp`.
   Eigen::VectorXd WarmStart(double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in
@@ -163,6 +176,8 @@ class Solver {
   std::vector<SolvedFrame> history_;  // up to two previous solved frames, newest last
   std::optional<MotionState> motion_;
   std::optional<double> last_fix_;  // time of the newest solve with keypoints
+  std::vector<double> headings_;    // psi_i, rad
+  std::optional<double> last_heading_update_;
   std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
   double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
 };

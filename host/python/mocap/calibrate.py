@@ -122,5 +122,6 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
                 shutil.copyfile(source, out / source.name)
                 config[key] = source.name
         config["skeleton"], config["imus"] = "skeleton.json", "imus.json"
+        config["solver"] = {**config.get("solver", {}), "heading_time_constant": window.HEADING_TIME_CONSTANT_S}
         (out / "session.json").write_text(json.dumps(config, indent=1))
     return report

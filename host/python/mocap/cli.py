@@ -146,7 +146,8 @@ def _simulate(args: argparse.Namespace) -> int:
 
     from mocap.sim import take_out
 
-    print(json.dumps(take_out.run(Path(args.take_out), args.seconds, args.preset, args.seed)), flush=True)
+    print(json.dumps(take_out.run(Path(args.take_out), args.seconds, args.preset, args.seed,
+                                  args.calibration_pose)), flush=True)
     return 0
 
 
@@ -188,6 +189,11 @@ def _eval(args: argparse.Namespace) -> int:
     from mocap import eval as evaluation
     from mocap.sim import detector, take
 
+    if args.table == "heading":
+        from mocap import tables_heading
+
+        print(tables_heading.markdown(tables_heading.rows(args.seconds), args.seconds), end="", flush=True)
+        return 0
     if args.table:
         from mocap import tables
 
@@ -270,7 +276,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="estimated: skeleton, IMU mounting and heading from the take's first 5 s "
                         "(mocap.calibration.window); oracle: the true ones (default estimated)")
     e.add_argument("--json", help="JSON file to write the results to")
-    e.add_argument("--table", choices=["paper"], help="regenerate the paper's tables and plots on the test clips")
+    e.add_argument("--table", choices=["paper", "heading"],
+                   help="paper: regenerate the paper's tables and plots on the test clips; heading: print the "
+                        "heading tracking's table (a long take of the demo motion, --seconds)")
+    e.add_argument("--seconds", type=float, default=60.0, help="length of the --table heading take (default 60)")
     e.add_argument("--docs", default=str(paths.REPO / "docs"), help="where --table writes results.md (default docs/)")
     e.set_defaults(func=_eval)
 
@@ -305,6 +314,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--preset", default="hq13", choices=["hq13", "hs13", "hq6", "hs6"],
                     help="cameras and IMU set, as `mocap eval` (default hq13)")
     sm.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sm.add_argument("--calibration-pose", choices=["T", "N"],
+                    help="start with 1 s of a T-pose (arms out) or N-pose (arms down) and a 0.5 s blend "
+                         "into the motion: the calibration uses it (docs/calibration.md)")
     sm.set_defaults(func=_simulate)
 
     de = sub.add_parser("detect", help="the edge keypoint detector (BlazePose, region tracking) on a video: "

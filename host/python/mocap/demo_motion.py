@@ -315,6 +315,18 @@ def loop_motion(thetas: np.ndarray, seconds: float, dt: float, ease_s: float = E
     return np.concatenate(out)[: max(len(forward), int(np.ceil(seconds / dt)))]
 
 
+def after_held_pose(thetas: np.ndarray, pose: np.ndarray, dt: float, hold_s: float = 1.0,
+                    blend_s: float = 0.5) -> np.ndarray:
+    """The motion after a calibration pose: `pose` (its joints; root where the motion starts,
+    facing its way) held for hold_s, then blended into the motion's first pose over blend_s."""
+    hold, blend = round(hold_s / dt), round(blend_s / dt)
+    prefix = np.tile(pose, (hold + blend, 1))
+    prefix[:, :6] = thetas[0, :6]
+    w = np.linspace(0.0, 1.0, blend)[:, None]
+    prefix[hold:, 6:] = (1 - w) * prefix[hold:, 6:] + w * thetas[0, 6:]
+    return np.vstack([prefix, thetas])
+
+
 def load_motion(rate: float = 60.0, seconds: float = DEMO_SECONDS) -> tuple[_core.Skeleton, np.ndarray, float]:
     """The demo's (skeleton, poses, dt): the Balancing trial, fetched if needed, fitted and
     looped (loop_motion) to `seconds`."""

@@ -33,10 +33,11 @@ def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOption
     return options
 
 
-def solve(t: sim_take.Take, options: _core.SolverOptions,
-          calibration: window.Calibration | None = None) -> tuple[np.ndarray, np.ndarray]:
+def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Calibration | None = None,
+          headings: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Solved poses (F, 66) and solve times (F,) ms of a take, with the oracle calibration
-    (the take's skeleton, nominal layout and true IMU sites) or an estimated one."""
+    (the take's skeleton, nominal layout and true IMU sites) or an estimated one; `headings`,
+    when given, receives each frame's heading corrections (rad, Solver.headings)."""
     c = calibration
     solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
               else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
@@ -48,6 +49,8 @@ def solve(t: sim_take.Take, options: _core.SolverOptions,
         kp = kp if kp is not None else np.zeros((0, len(t.layout), 3))
         r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f], t.accelerations[f])
         thetas[f], ms[f] = r.theta, r.solve_time_ms
+        if headings is not None:
+            headings.append(list(solver.headings))
     return thetas, ms
 
 
@@ -146,7 +149,10 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
     elif baseline == "triangulation":
         solved, ms = baselines.video_only(t), np.zeros(len(t.thetas))
     else:
-        solved, ms = solve(t, options_for(omit, settings), estimated)
+        options = options_for(omit, settings)
+        if estimated and not any(s.startswith("heading_time_constant=") for s in settings):
+            options = window.solver_options(options)
+        solved, ms = solve(t, options, estimated)
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate, estimated.skeleton if estimated else None)
     result.update({"clip": str(clip), "method": baseline or "fused", "preset": config.preset,
                    "cameras": len(t.rig.cameras),
@@ -189,6 +195,25 @@ def calibration_errors(t: sim_take.Take, c: window.Calibration) -> dict:
     lengths = {b: 100 * float(np.linalg.norm(c.skeleton.offsets[names.index(b)]) -
                               np.linalg.norm(t.skeleton.offsets[names.index(b)])) for b in LIMB_BONES}
     return {"imus": out, "limb_length_cm": lengths}
+
+
+def heading_errors_deg(t: sim_take.Take, c, tracked: np.ndarray) -> np.ndarray:
+    """(F, M) |heading error| per frame and IMU (deg): the reference in use, Rz(psi_f) times the
+    estimated one (tracked: (F, M) corrections psi_f, rad), against the one that would
+    explain the frame's reading exactly: the true reference turned by the reading's own
+    heading error (its drift and spec error), which the truth's poses and mountings reveal.
+    c: anything with the IMU sites in use as `imus` (a window.Calibration, or the take)."""
+    measured = rotations.matrix_from_quaternion(t.quaternions)  # sensor -> own reference
+    out = np.empty(tracked.shape)
+    for f, theta in enumerate(t.thetas):
+        rot, _ = t.skeleton.forward_kinematics(theta)
+        for i, (est, true) in enumerate(zip(c.imus, t.imus)):
+            sensor = np.asarray(rot[true.bone]) @ np.asarray(true.mount)  # true world orientation
+            wanted = sensor @ measured[f, i].T  # reference -> world that explains the reading
+            turn = rotations.exp(np.array([0.0, 0.0, tracked[f, i]])) @ np.asarray(est.reference) @ wanted.T
+            out[f, i] = abs(np.degrees(2 * np.arctan2(rotations.quaternion_from_matrix(turn)[3],
+                                                      rotations.quaternion_from_matrix(turn)[0])))
+    return np.where(out > 180.0, 360.0 - out, out)
 
 
 def summarise(results: list[dict]) -> dict:

@@ -108,6 +108,8 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
                "layout": str(paths.LAYOUTS / f"{t.layout.name}.json"), "prior": str(paths.HOST_DATA / "prior_default.json"),
                "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}
+    if calibration == "estimated":
+        session["solver"] = {"heading_time_constant": window.HEADING_TIME_CONSTANT_S}
     (folder / "session.json").write_text(json.dumps(session, indent=1))
     return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids, endpoints,
                   session_skeleton, calibration)

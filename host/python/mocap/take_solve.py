@@ -66,8 +66,8 @@ def solve_take(folder: Path, out: Path) -> dict:
     readings = window.readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
                                           for m in take.imus]) if take.imus else None
     cal = window.estimate(take.rig, det, times, take.layout, readings)
-    thetas, statuses = window.solve_frames(Solver(cal.skeleton, take.rig, cal.layout, cal.imus), det, times,
-                                           readings)
+    solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
+    thetas, statuses = window.solve_frames(solver, det, times, readings)
     out.mkdir(parents=True, exist_ok=True)
     _write_joints(out / "joints.csv", cal.skeleton, thetas, take)
     write_bvh(out / "take.bvh", cal.skeleton, thetas, take.frame_rate)
@@ -76,7 +76,10 @@ def solve_take(folder: Path, out: Path) -> dict:
               "layout": take.layout, "imus_used": len(cal.imus),
               "skeleton": {"from_frames": int(np.searchsorted(times, window.SECONDS)), "scales": start.scales,
                            "lengths_m": start.lengths_m, "frames_per_length": start.frames},
-              "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)}}}
+              "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)},
+                                              # the heading tracking's correction at the take's end
+                                              "heading_change_deg": {s.name: float(np.degrees(h)) for s, h in
+                                                                     zip(cal.imus, solver.headings)}}}
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
     (out / "skeleton.json").write_text(cal.skeleton.to_json())
     (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
@@ -103,7 +106,8 @@ def _markdown(r: dict) -> str:
                      for g, s in r["skeleton"]["scales"].items())
     refined = ", ".join(f"{g} x{s:.3f}" for g, s in w["scales_window"].items())
     shifts = ", ".join(f"{g} ({', '.join(f'{100 * v:+.1f}' for v in d)}) cm" for g, d in w["shifts_window_m"].items())
-    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {i['first_residual_deg']:.1f} | "
+    change = r["solve"]["heading_change_deg"]
+    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {change[name]:+.1f} | {i['first_residual_deg']:.1f} | "
                       f"{i['residual_deg']:.2f} | {', '.join(f'{100 * v:.1f}' for v in w['imu_positions'][name]['offset_m'])} | "
                       f"{'estimated' if w['imu_positions'][name]['estimated'] else 'usual place'} |"
                       for name, i in w["imus"].items())
@@ -118,8 +122,9 @@ def _markdown(r: dict) -> str:
         f"Calibration pose: {w['calibration_pose'] + '-pose held, ' + str(w['calibration_pose_frames']) + ' frames' if w['calibration_pose'] else 'none found'}.",
         ""]
     if w["imus"]:
-        lines += ["| sensor | bone | heading (deg) | start residual (deg) | residual (deg) | offset (cm) | position |",
-                  "|---|---|---|---|---|---|---|", imus, ""]
+        lines += ["Heading: from the window; change: the heading tracking's correction at the take's end.", "",
+                  "| sensor | bone | heading (deg) | change (deg) | start residual (deg) | residual (deg) | offset (cm) | "
+                  "position |", "|---|---|---|---|---|---|---|---|", imus, ""]
     else:
         lines += ["No IMUs: a video-only solve.", ""]
     lines += [f"Solve: {r['frames']} frames, {r['imus_used']} IMUs; statuses {r['solve']['statuses']}.", ""]

@@ -14,12 +14,8 @@ from mocap.sim import take as sim_take
 def pose_then_motion(pose: str = "T", seconds: float = 5.0):
     """A take of the demo motion after 1 s of a T- or N-pose and a 0.5 s blend into the motion."""
     skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
-    prefix = np.tile(window.calibration_poses(skeleton)[pose], (90, 1))
-    prefix[:, :6] = thetas[0, :6]  # where the motion starts, facing its way
-    blend = np.linspace(0.0, 1.0, 30)[:, None]
-    prefix[60:, 6:] = (1 - blend) * prefix[60:, 6:] + blend * thetas[0, 6:]
-    return sim_take.simulate_motion(skeleton, np.vstack([prefix, thetas]), dt, sim_take.Config(),
-                                    np.random.default_rng(2))
+    thetas = demo_motion.after_held_pose(thetas, window.calibration_poses(skeleton)[pose], dt)
+    return sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(), np.random.default_rng(2))
 
 
 @pytest.fixture(scope="module")

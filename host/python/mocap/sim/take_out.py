@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, demo_motion, rotations
+from mocap.calibration import window
 from mocap.sim import imu
 from mocap.sim import take as sim_take
 from mocap.xsens_csv import TICKS_PER_S
@@ -53,10 +54,15 @@ def _people(keypoints: list, n_cameras: int, n_keypoints: int) -> list:
 
 
 def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
-             imu_errors: imu.ImuErrors = imu.ImuErrors()) -> tuple[TakeFolder, Truth]:
-    """The take (IMU quaternions in each sensor's earth frame) and its truth."""
+             imu_errors: imu.ImuErrors = imu.ImuErrors(),
+             calibration_pose: str | None = None) -> tuple[TakeFolder, Truth]:
+    """The take (IMU quaternions in each sensor's earth frame) and its truth; with a
+    calibration pose ("T" or "N", window.calibration_poses), the performer holds it for 1 s
+    and blends into the motion over 0.5 s first."""
     rng = np.random.default_rng(seed)
     skeleton, thetas, dt = demo_motion.load_motion(FRAME_RATE, seconds)
+    if calibration_pose:
+        thetas = demo_motion.after_held_pose(thetas, window.calibration_poses(skeleton)[calibration_pose], dt)
     config = sim_take.Config(preset=preset, imu=imu_errors)
     t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
     headings = rng.uniform(-180.0, 180.0, len(t.imus))
@@ -92,9 +98,10 @@ def write_truth(folder: Path, truth: Truth) -> None:
         "rig": "truth_rig.json", "sensors": sensors, "keypoint_sites": sites}, indent=1) + "\n")
 
 
-def run(folder: Path, seconds: float, preset: str = "hq13", seed: int = 0) -> dict:
+def run(folder: Path, seconds: float, preset: str = "hq13", seed: int = 0,
+        calibration_pose: str | None = None) -> dict:
     """`mocap simulate --take-out`: simulates, writes the take folder and its truth."""
-    take, truth = simulate(seconds, preset, seed)
+    take, truth = simulate(seconds, preset, seed, calibration_pose=calibration_pose)
     write_take(folder, take)
     write_truth(Path(folder), truth)
     return {"take": str(folder), "frames": take.n_frames, "cameras": len(take.rig.cameras),

@@ -1,0 +1,44 @@
+"""Heading tracking (SolverOptions.heading_time_constant) with a window calibration: on a 20 s
+take whose IMU headings drift as magnetometers do indoors (5 deg/sqrt(min), ten times the
+default simulation's), the headings in use end closer to the truth with tracking than with
+the window's alone, and the joint centres are no worse."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mocap import demo_motion
+from mocap import eval as evaluation
+from mocap.calibration import window
+from mocap.sim import imu
+from mocap.sim import take as sim_take
+
+
+@pytest.fixture(scope="module")
+def drifting():
+    skeleton, thetas, dt = demo_motion.load_motion(60.0, 20.0)
+    config = sim_take.Config(imu=dataclasses.replace(imu.ImuErrors(), heading_drift_deg_per_sqrt_min=5.0))
+    t = sim_take.simulate_motion(skeleton, thetas, dt, config, np.random.default_rng(1))
+    return t, evaluation.estimate_calibration(t)
+
+
+def solve(t, c, options):
+    """Joint-centre error (cm) and the heading corrections per frame (F, M) rad."""
+    headings = []
+    thetas, _ = evaluation.solve(t, options, c, headings)
+    errors = evaluation.errors(t.skeleton, t.thetas, thetas, t.times[1] - t.times[0], c.skeleton)
+    return errors["joint_centres_pos_cm"], np.array(headings)
+
+
+def test_tracking_keeps_drifting_headings_near_the_truth(drifting):
+    t, c = drifting
+    fixed_cm, fixed = solve(t, c, evaluation.options_for([]))
+    tracked_cm, tracked = solve(t, c, window.solver_options())
+    assert not fixed.any() and np.abs(tracked).max() > np.radians(1.0)
+    last = slice(-600, None)  # the last 10 s
+    before = np.median(evaluation.heading_errors_deg(t, c, fixed)[last])
+    after = np.median(evaluation.heading_errors_deg(t, c, tracked)[last])
+    # Measured: median 4.3 deg with the window's headings, 3.1 tracked; joint centres 2.02 / 2.01 cm.
+    assert after < 0.8 * before, (before, after)
+    assert tracked_cm < fixed_cm + 0.02, (fixed_cm, tracked_cm)
