@@ -43,6 +43,10 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     assert counts[0] == 8 and np.median(counts[after]) == 8  # no camera is left out at the start
     stale = [s for h in run.healths for s in h.streams if s.stream == "camera/cam3" and not s.active]
     assert stale, "Health never reported the unplugged camera inactive"
+    # The calibrated session tracks the headings; Health reports each IMU's correction.
+    corrections = [s.heading_correction_deg for s in run.healths[-1].streams if s.stream.startswith("imu/")]
+    assert len(corrections) == 13 and np.isfinite(corrections).all() and np.abs(corrections).max() < 30
+    assert np.abs(corrections).max() > 0.1, corrections
 
     # The recording (session attached) solved offline through the same pipeline gives the
     # live poses back.
@@ -158,22 +162,30 @@ def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_po
     assert error < 1.2 * live.score(studio, first)["pos_error_cm"] + 0.2, error
 
 
-def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(tmp_path):
+@pytest.fixture(scope="module")
+def oracle_take(tmp_path_factory):
+    """A studio with the oracle session, played live and recorded (7 s, seed 3)."""
+    folder = tmp_path_factory.mktemp("oracle_studio")
+    studio = live.prepare(folder / "studio", seconds=7.0, seed=3, calibration="oracle")
+    run = live.play(studio, record=folder / "take.mcap")
+    return studio, run, folder / "take.mcap"
+
+
+def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(oracle_take, tmp_path):
     """A studio with the oracle session records its first seconds; `mocap calibrate` makes a
     session from the recording alone; the recording solved with that session lands near the
     oracle's live result."""
     from mocap import calibrate, cli
     from mocap import eval as evaluation
 
-    studio = live.prepare(tmp_path / "studio", seconds=7.0, seed=3, calibration="oracle")
-    run = live.play(studio, record=tmp_path / "take.mcap")
+    studio, run, take = oracle_take
     oracle = live.score(studio, run)
-    assert cli.main(["calibrate", "--recording", str(tmp_path / "take.mcap"), "--out", str(tmp_path / "cal")]) == 0
+    assert cli.main(["calibrate", "--recording", str(take), "--out", str(tmp_path / "cal")]) == 0
     report = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert len(report["imus_calibrated"]) == 13 and not report["imus_missing"]
     calibrated = _core.Skeleton.load(str(tmp_path / "cal" / "skeleton.json"))
     assert not np.allclose(calibrated.offsets, studio.skeleton.offsets, atol=1e-3)  # estimated, not copied
-    poses, _ = offline.solve_recording(tmp_path / "take.mcap", tmp_path / "cal" / "session.json")
+    poses, _ = offline.solve_recording(take, tmp_path / "cal" / "session.json")
     frame_ns = run.start_ns + np.round(studio.frame_times * 1e9).astype(np.int64)
     by_time = {p.capture_time_ns: np.array(p.theta) for p in poses}
     matched = [f for f, t in enumerate(frame_ns) if t in by_time]
@@ -188,3 +200,38 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(tm
         with recording.Recorder(bare) as r:
             r.write(wire.encode(wire.KeypointFrame(camera_id="cam0")), 1)
         calibrate.calibrate(bare, tmp_path / "none")
+
+
+def test_calibrate_connect_records_the_live_streams_then_calibrates(oracle_take, tmp_path):
+    """`mocap calibrate --connect EP --session S`: the oracle take replayed live onto EP is
+    recorded for the window and calibrated, as from the recording itself."""
+    import threading
+
+    from mocap import calibrate, cli
+
+    studio, _, take = oracle_take
+    endpoint = f"tcp://127.0.0.1:{live.free_ports(1)[0]}"
+    out = tmp_path / "cal"
+    result = {}
+    worker = threading.Thread(target=lambda: result.update(code=cli.main(
+        ["calibrate", "--connect", endpoint, "--session", str(studio.session), "--out", str(out)])))
+    worker.start()
+    time.sleep(0.5)  # the recorder connects; the replay binds
+    recording.replay(take, endpoint, speed=1.0, restamp=True)
+    worker.join(timeout=120)
+    assert result.get("code") == 0
+    assert (out / "calibration.mcap").is_file()
+    report = json.loads((out / "calibration.json").read_text())
+    assert len(report["imus_calibrated"]) == 13 and report["window"]["frames"] > 100
+    session = json.loads((out / "session.json").read_text())
+    assert session["solver"]["heading_time_constant"] > 0  # the window's headings are tracked
+    from_file = tmp_path / "from_file"
+    calibrate.calibrate(take, from_file, studio.session)
+    live_lengths = np.linalg.norm(_core.Skeleton.load(str(out / "skeleton.json")).offsets, axis=1)
+    file_lengths = np.linalg.norm(_core.Skeleton.load(str(from_file / "skeleton.json")).offsets, axis=1)
+    # The same streams (the live recording may miss the first few messages): the same skeleton.
+    assert np.abs(live_lengths - file_lengths).max() < 0.01
+    with pytest.raises(InputError, match="nothing received"):
+        calibrate.record_window([f"tcp://127.0.0.1:{live.free_ports(1)[0]}"], tmp_path / "none.mcap",
+                                studio.session, timeout_s=1.0)
+    assert cli.main(["calibrate", "--connect", endpoint, "--out", str(tmp_path / "x")]) != 0  # needs --session

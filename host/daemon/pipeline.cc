@@ -265,6 +265,8 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   for (size_t i = 0; i < imu_stats_.size(); ++i) {
     add("imu/" + session_.imus[i].name, sync_.ImuActive(i, now_ns), imu_stats_[i],
         &sync_.imu_counts(i));
+    h.mutable_streams(h.streams_size() - 1)
+        ->set_heading_correction_deg(solver_->headings()[i] * 180.0 / M_PI);
   }
   for (auto& [hub, stats] : hub_stats_)
     add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);

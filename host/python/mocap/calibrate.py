@@ -1,6 +1,8 @@
 """`mocap calibrate --recording FILE [--session S] --out DIR`: a live session whose skeleton
 and IMU sites are estimated from the first seconds of a recording of the studio's streams
-(`mocap record`), so that mocapd captures without oracle calibration.
+(`mocap record`), so that mocapd captures without oracle calibration. With `--connect EP...
+--session S` it records those seconds from the running edge boxes and IMU hubs first
+(DIR/calibration.mcap, kept), then calibrates from them: `mocapd DIR/session.json` captures.
 
 Camera frames are grouped by capture time (each camera's frame nearest a reference camera's
 within half a frame period); the subject is chosen per camera as for take folders; IMU
@@ -19,6 +21,8 @@ from __future__ import annotations
 import json
 import shutil
 import tempfile
+import threading
+import time
 from collections import defaultdict
 from pathlib import Path
 
@@ -70,6 +74,31 @@ def _frames(cams: dict, camera_names: list[str], k: int) -> tuple[np.ndarray, np
             if abs(times[f] - t) <= half and fitting:
                 people[c][f] = np.array(fitting)
     return times, choose_subject(people, len(times), k)
+
+
+def record_window(endpoints: list[str], path: Path, session: Path, seconds: float = window.SECONDS,
+                  timeout_s: float = 60.0) -> recording.Counts:
+    """Records the streams at `endpoints` until `seconds` (and a margin of 1.5 s) have passed
+    since the first message; InputError if nothing came within timeout_s."""
+    stop = threading.Event()
+    seen = {"first": None, "last": None}  # monotonic times of the first and the latest message
+
+    def on_record(_topic: str) -> None:
+        seen["last"] = time.monotonic()
+        seen["first"] = seen["first"] or seen["last"]
+        if seen["last"] - seen["first"] > seconds + 1.5:
+            stop.set()
+
+    timer = threading.Timer(timeout_s, stop.set)
+    timer.start()
+    try:
+        counts = recording.record(endpoints, path, None, stop, on_record, session=session)
+    finally:
+        timer.cancel()
+    if seen["first"] is None or seen["last"] - seen["first"] < seconds:
+        raise InputError(f"{' '.join(endpoints)}: {'nothing' if seen['first'] is None else 'too little'} received in "
+                         f"{timeout_s:.0f} s; are the edge boxes and hubs publishing there?")
+    return counts
 
 
 def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS) -> dict:

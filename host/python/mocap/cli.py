@@ -96,7 +96,15 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     from mocap import calibrate
 
-    report = calibrate.calibrate(Path(args.recording), Path(args.out), Path(args.session) if args.session else None,
+    if bool(args.recording) == bool(args.connect):
+        raise InputError("give exactly one of --recording FILE and --connect EP...")
+    recorded = Path(args.recording) if args.recording else Path(args.out) / "calibration.mcap"
+    if args.connect:
+        if not args.session:
+            raise InputError("--connect needs --session: the rig, layout and IMU set to calibrate")
+        recorded.parent.mkdir(parents=True, exist_ok=True)
+        calibrate.record_window(args.connect, recorded, Path(args.session), args.seconds)
+    report = calibrate.calibrate(recorded, Path(args.out), Path(args.session) if args.session else None,
                                  args.seconds)
     print(json.dumps({"session": str(Path(args.out) / "session.json"), "frames": report["frames"],
                       "imus_calibrated": len(report["imus_calibrated"]), "imus_missing": report["imus_missing"]}),
@@ -299,8 +307,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=_demo)
 
     ca = sub.add_parser("calibrate", help="a live session whose skeleton and IMU mounting, heading and position are "
-                        "estimated from the first seconds of a recording (docs/calibration.md)")
-    ca.add_argument("--recording", required=True, help="MCAP file of `mocap record` / `mocap demo --record`")
+                        "estimated from the first seconds of a recording or of the live streams (docs/calibration.md)")
+    ca.add_argument("--recording", help="MCAP file of `mocap record` / `mocap demo --record`")
+    ca.add_argument("--connect", nargs="+", metavar="EP", help="instead: record the first seconds live from these "
+                    "publishers (edge boxes, IMU hubs; needs --session), kept as OUT/calibration.mcap")
     ca.add_argument("--session", default=None, help="session giving rig, layout, IMU names and bones, endpoints "
                     "(default: the one attached to the recording)")
     ca.add_argument("--out", required=True, help="folder for the calibrated session (session.json and its files)")

@@ -29,6 +29,13 @@ def calibration_line(studio: live.Studio) -> str:
             "positions; `docs/calibration.md`, details in `session/calibration.json`): nothing of the truth.")
 
 
+def _largest(corrections: dict) -> str:
+    if not corrections:
+        return "n/a"
+    name = max(corrections, key=lambda k: abs(corrections[k]))
+    return f"{corrections[name]:+.1f} deg ({name})"
+
+
 def report(result: dict, seconds: float, studio: live.Studio) -> str:
     def fmt(v, unit=""):
         return "n/a" if v is None else f"{v:.2f}{unit}"
@@ -50,7 +57,8 @@ def report(result: dict, seconds: float, studio: live.Studio) -> str:
         f"| bone orientation error (mean) | {fmt(result.get('ori_error_deg'), ' deg')} |",
         f"| host latency p50 / p99 / max | {fmt(result['latency_p50_ms'])} / {fmt(result['latency_p99_ms'])} / "
         f"{fmt(result['latency_max_ms'], ' ms')} |",
-        f"| inputs dropped by the host | {dropped} |", "",
+        f"| inputs dropped by the host | {dropped} |",
+        f"| heading tracking: largest correction at the end | {_largest(result['heading_corrections_deg'])} |", "",
         "Host latency: from the arrival of a frame's last input to the publication of its pose.", ""])
 
 

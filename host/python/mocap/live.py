@@ -204,7 +204,11 @@ def score(studio: Studio, run: Run) -> dict:
            "latency_p50_ms": float(np.percentile(latency, 50)) if len(latency) else None,
            "latency_p99_ms": float(np.percentile(latency, 99)) if len(latency) else None,
            "latency_max_ms": float(latency.max()) if len(latency) else None,
-           "host_dropped": run.host_summary.get("dropped", {})}
+           "host_dropped": run.host_summary.get("dropped", {}),
+           # the host's heading tracking, as its last Health reported it (deg per IMU)
+           "heading_corrections_deg": {s.stream.removeprefix("imu/"): s.heading_correction_deg
+                                       for s in (run.healths[-1].streams if run.healths else [])
+                                       if s.stream.startswith("imu/")}}
     if len(matched) > 2:
         e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, float(np.median(np.diff(studio.frame_times))),
                               studio.session_skeleton)
