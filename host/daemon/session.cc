@@ -38,6 +38,8 @@ bool ReadSolver(const json& j, SolverOptions* options, std::string* error) {
       options->max_keypoint_cost = value.get<double>();
     else if (key == "heading_time_constant")
       options->heading_time_constant = value.get<double>();
+    else if (key == "heading_baseline_s")
+      options->heading_baseline_s = value.get<double>();
     else
       return *error = "unknown solver option '" + key + "'", false;
   }

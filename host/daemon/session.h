@@ -6,7 +6,8 @@
 //    "sync": {"group_tolerance_ms": 4, "max_wait_ms": 25, "stale_after_ms": 300,
 //             "imu_max_gap_ms": 40, "imu_max_hold_ms": 15, "imu_only_rate_hz": 60},
 //    "solver": {"function_tolerance": 1e-3, "max_iterations": 10, "predict_motion": true,
-//               "velocity_gain": 0.3, "max_keypoint_cost": 2.5, "heading_time_constant": 10}}
+//               "velocity_gain": 0.3, "max_keypoint_cost": 2.5, "heading_time_constant": 1,
+//               "heading_baseline_s": 0}}
 // Paths are relative to the session file. Camera ids on the wire are the rig's camera
 // names, sensor ids the IMU set's names. Missing "sync" / "solver" keys keep the defaults.
 #ifndef MOCAP_DAEMON_SESSION_H_

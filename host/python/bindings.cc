@@ -329,6 +329,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readwrite("max_keypoint_cost", &SolverOptions::max_keypoint_cost)
       .def_readwrite("heading_time_constant", &SolverOptions::heading_time_constant)
       .def_readwrite("max_heading_step", &SolverOptions::max_heading_step)
+      .def_readwrite("heading_baseline_s", &SolverOptions::heading_baseline_s)
       .def_readwrite("max_iterations", &SolverOptions::max_iterations)
       .def_readwrite("max_initial_iterations", &SolverOptions::max_initial_iterations)
       .def_readwrite("function_tolerance", &SolverOptions::function_tolerance)

@@ -76,7 +76,8 @@ bool SolverOptions::IsValid(std::string* error) const {
       !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) ||
       !(velocity_gain > 0.0 && velocity_gain <= 1.0) || !(max_keypoint_cost > 0.0) ||
       !(heading_time_constant >= 0.0 && std::isfinite(heading_time_constant)) ||
-      !(max_heading_step > 0.0 && max_heading_step <= M_PI) || max_iterations < 1 ||
+      !(max_heading_step > 0.0 && max_heading_step <= M_PI) ||
+      !(heading_baseline_s >= 0.0 && std::isfinite(heading_baseline_s)) || max_iterations < 1 ||
       max_initial_iterations < 1 || !(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
       !(parameter_tolerance >= 0.0)) {
     *error = "solver options out of range";
@@ -124,6 +125,7 @@ std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayou
   s->prior_ = std::move(prior);
   s->options_ = options;
   s->headings_.assign(s->imus_.size(), 0.0);
+  s->heading_baselines_.assign(s->imus_.size(), {});
   s->Reset();
   return s;
 }
@@ -258,6 +260,15 @@ void Solver::TrackHeadings(const CleanFrame& frame) {
     double yaw = 2.0 * std::atan2(q.z(), q.w());
     if (yaw > M_PI) yaw -= 2.0 * M_PI;
     if (yaw < -M_PI) yaw += 2.0 * M_PI;
+    if (options_.heading_baseline_s > 0.0) {
+      HeadingBaseline& b = heading_baselines_[i];
+      if (b.seconds < options_.heading_baseline_s) {  // still learning what "no drift" looks like
+        b.seconds += dt;
+        b.yaw_integral += yaw * dt;
+        continue;
+      }
+      yaw -= b.yaw_integral / b.seconds;
+    }
     yaw = std::clamp(yaw, -options_.max_heading_step, options_.max_heading_step);
     headings_[i] = std::remainder(headings_[i] + gain * yaw, 2.0 * M_PI);
   }

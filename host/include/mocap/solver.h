@@ -69,7 +69,13 @@ struct SolverOptions {
   // a heading estimated from a short window, or drifting as magnetometers do indoors, is
   // pulled to what the cameras see; a yaw video does not see leaves psi_i where it is.
   double heading_time_constant = 0.0;
-  double max_heading_step = 0.1;     // rad: a frame's yaw beyond this counts as this much
+  double max_heading_step = 0.1;  // rad: a frame's yaw beyond this counts as this much
+  // 0: the headings follow the yaw itself (headings fitted to this video, as the window
+  // calibration's are). > 0: each IMU's mean yaw over its first heading_baseline_s seconds
+  // of tracked frames is its baseline, and the heading follows changes from it: drift only,
+  // for headings from elsewhere (a suit's calibration) whose video yaw the detector's
+  // systematic keypoint offsets bias by a few degrees.
+  double heading_baseline_s = 0.0;
   int max_iterations = 10;           // per warm-started frame
   int max_initial_iterations = 100;  // for the first frame
   // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
@@ -177,6 +183,10 @@ class Solver {
   std::optional<MotionState> motion_;
   std::optional<double> last_fix_;  // time of the newest solve with keypoints
   std::vector<double> headings_;    // psi_i, rad
+  struct HeadingBaseline {
+    double seconds = 0, yaw_integral = 0;  // of tracked frames so far
+  };
+  std::vector<HeadingBaseline> heading_baselines_;
   std::optional<double> last_heading_update_;
   std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
   double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
