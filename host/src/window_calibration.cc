@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/normal_prior.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -21,7 +22,8 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
-bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>& frames,
+bool CheckInputs(const Skeleton& skeleton, const std::vector<ImuSite>& imus,
+                 const std::vector<FrameObservations>& frames,
                  const std::vector<Eigen::VectorXd>& thetas, const std::optional<PosePrior>& prior,
                  const CalibrationOptions& options, std::string* error) {
   if (frames.empty()) return Fail(error, "the calibration window has no frames");
@@ -40,6 +42,8 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>&
   if (!(options.scale_sigma > 0) || !(options.shift_sigma > 0) || !(options.site_sigma > 0) ||
       options.max_iterations < 1)
     return Fail(error, "the priors' sigmas must be positive, max_iterations at least 1");
+  if (!options.heading_priors.empty() && options.heading_priors.size() != imus.size())
+    return Fail(error, "heading_priors needs one entry per IMU (or none)");
   if (!options.joint_sigmas.empty() &&
       options.joint_sigmas.size() != static_cast<size_t>(skeleton.num_bones()))
     return Fail(error, "joint_sigmas needs one entry per bone (or none)");
@@ -48,6 +52,10 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<FrameObservations>&
         h.theta.size() != skeleton.pose_dim() || !h.theta.allFinite() || !(h.sigma > 0))
       return Fail(error,
                   "a held pose needs a frame of the window, a finite pose and a positive sigma");
+  }
+  for (const Eigen::Vector2d& h : options.heading_priors) {
+    if (!std::isfinite(h(0)) || std::isnan(h(1)))
+      return Fail(error, "a heading prior needs a finite yaw and a sigma");
   }
   for (const Eigen::Vector3d& sigma : options.shift_sigmas) {
     if (!(sigma.array() > 0).all() || !sigma.allFinite())
@@ -160,6 +168,7 @@ class WindowProblem {
     for (size_t i = 0; i < imus_.size(); ++i) {
       if (!problem_.HasParameterBlock(x_->mounts[i].data())) continue;
       if (!options_.estimate_mounts) problem_.SetParameterBlockConstant(x_->mounts[i].data());
+      if (i < options_.heading_priors.size()) AddHeadingPrior(i, options_.heading_priors[i]);
       if (!options_.estimate_headings) problem_.SetParameterBlockConstant(&x_->headings[i]);
     }
   }
@@ -227,6 +236,16 @@ class WindowProblem {
     }
   }
 
+  // The prior's yaw as a turn psi of the given reference (wrapped to the nearest turn).
+  void AddHeadingPrior(size_t i, const Eigen::Vector2d& prior) {
+    const double sigma = prior(1);
+    if (!(sigma > 0) || !std::isfinite(sigma)) return;
+    const Eigen::Matrix3d& r = imus_[i].reference;
+    const double mean = std::remainder(prior(0) - std::atan2(r(1, 0), r(0, 0)), 2 * M_PI);
+    costs_.emplace_back(GaussianPrior(&mean, Eigen::VectorXd::Constant(1, sigma)));
+    problem_.AddResidualBlock(costs_.back().get(), nullptr, &x_->headings[i]);
+  }
+
   // A prior on a block that is in the problem, held when it is not estimated.
   void AddPrior(double* block, const double* mean, const Eigen::VectorXd& sigma, bool estimated) {
     if (!problem_.HasParameterBlock(block)) return;
@@ -288,6 +307,54 @@ std::vector<double> ImuResidualsDeg(const CalibrationResult& r, const Unknowns& 
   return out;
 }
 
+// Projects the sites' change from sites0 onto the eigenvectors of their marginal
+// covariance whose standard deviation is below max_std; when the covariance cannot be had
+// (a rank-deficient window), the sites stay at sites0.
+void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>& sites0,
+                             ceres::Problem* problem, std::vector<Eigen::Vector3d>* sites,
+                             int* kept) {
+  std::vector<const double*> blocks;
+  std::vector<int> keypoints;
+  for (size_t k = 0; k < sites->size(); ++k) {
+    if (problem->HasParameterBlock((*sites)[k].data())) {
+      blocks.push_back((*sites)[k].data());
+      keypoints.push_back(static_cast<int>(k));
+    }
+  }
+  *kept = 0;
+  if (blocks.empty()) return;
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::SPARSE_QR;
+  co.num_threads = 2;
+  ceres::Covariance covariance(co);
+  const int n = 3 * static_cast<int>(blocks.size());
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(n, n);
+  if (!covariance.Compute(blocks, problem) || !covariance.GetCovarianceMatrix(blocks, c.data())) {
+    *sites = sites0;  // the window does not tell what it observes (rank-deficient): no change
+    *kept = 0;
+    return;
+  }
+  Eigen::VectorXd change(n);
+  for (size_t j = 0; j < keypoints.size(); ++j) {
+    change.segment<3>(3 * j) = (*sites)[keypoints[j]] - sites0[keypoints[j]];
+  }
+  const Eigen::MatrixXd dense = c;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
+  const Eigen::VectorXd& variance = eig.eigenvalues();
+  Eigen::VectorXd kept_change = Eigen::VectorXd::Zero(n);
+  *kept = 0;
+  for (int i = 0; i < n; ++i) {
+    if (variance(i) < max_std * max_std) {
+      const Eigen::VectorXd v = eig.eigenvectors().col(i);
+      kept_change += v * v.dot(change);
+      ++*kept;
+    }
+  }
+  for (size_t j = 0; j < keypoints.size(); ++j) {
+    (*sites)[keypoints[j]] = sites0[keypoints[j]] + kept_change.segment<3>(3 * j);
+  }
+}
+
 }  // namespace
 
 bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLayout& layout,
@@ -295,7 +362,7 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
                      const std::vector<FrameObservations>& frames,
                      const std::vector<Eigen::VectorXd>& thetas, const CalibrationOptions& options,
                      CalibrationResult* result, std::string* error) {
-  if (!CheckInputs(skeleton, frames, thetas, prior, options, error)) return false;
+  if (!CheckInputs(skeleton, imus, frames, thetas, prior, options, error)) return false;
   Unknowns x{thetas,
              std::vector<double>(NumGroups(options.scale_group), 1.0),
              std::vector<Eigen::Vector3d>(NumGroups(options.shift_group), Eigen::Vector3d::Zero()),
@@ -326,6 +393,10 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
   result->message = summary.BriefReport();
   if (!summary.IsSolutionUsable()) return Fail(error, "calibration failed: " + summary.message);
 
+  if (options.estimate_sites && options.site_observable_std > 0.0) {
+    KeepObservedSiteChanges(options.site_observable_std, sites0, &window.problem(), &x.sites,
+                            &result->site_directions_kept);
+  }
   if (!AdjustedSkeleton(skeleton, options, x, &result->skeleton, error)) return false;
   result->thetas = x.thetas;
   result->scales = x.scales;

@@ -9,7 +9,8 @@
 // frame about world z, R_ig = Rz(psi) R_ig0. Cost: the frames' E_P (keypoint reprojection, Cauchy,
 // confidence-weighted), E_R with the unknown mounting and heading, E_PP and E_PD per frame, and
 // Gaussian priors holding each site near the layout's (site_sigma), each scale near its start
-// (scale_sigma) and each shift near zero (shift_sigma).
+// (scale_sigma), each shift near zero (shift_sigma) and, when given, each heading near its
+// prior from elsewhere (heading_priors).
 //
 // Why it is observable: the IMUs give each instrumented bone's orientation up to a constant
 // (mounting, heading) and video its position; as the bones turn, a keypoint's offset moves
@@ -60,7 +61,18 @@ struct CalibrationOptions {
   // mountings, which video does not see.
   std::vector<Eigen::Vector3d> joint_sigmas;
   std::vector<HeldPose> held_poses;
+  // Per IMU (or empty): a prior on its heading from elsewhere (the accelerometer), as the yaw
+  // of its estimated reference frame (rad, about world z) and a sigma (rad; zero or infinite:
+  // none). It settles what E_R leaves free: a segment that only turns about the vertical
+  // explains its readings with any heading, its mounting's yaw taking up the rest.
+  std::vector<Eigen::Vector2d> heading_priors;
   double site_sigma = 0.03;  // m, prior on each keypoint site around the layout's
+  // m (0: keep the whole estimate). The sites' change from the layout's is kept only along
+  // the directions of the sites' joint covariance (the poses, lengths, mountings and
+  // headings marginalised: ceres::Covariance) whose standard deviation is below this: what
+  // the window observes. The rest, near-gauges with the poses (a whole leg's sites moving
+  // together), stays at the layout's.
+  double site_observable_std = 0.0;
   bool estimate_scales = true, estimate_shifts = true, estimate_sites = true,
        estimate_mounts = true, estimate_headings = true;
   int max_iterations = 60;
@@ -74,6 +86,7 @@ struct CalibrationResult {
   std::vector<double> scales;              // per length group, relative to the given skeleton
   std::vector<Eigen::Vector3d> shifts;     // per shift group, m (of its first bone)
   std::vector<Eigen::VectorXd> thetas;     // the window's poses
+  int site_directions_kept = 0;            // of 3 x keypoints (site_observable_std)
   std::vector<double> imu_residual_deg;    // median |E_R angle| per IMU (NaN: unseen)
   std::vector<int> keypoint_observations;  // per keypoint: detections used
   double initial_cost = 0, final_cost = 0;

@@ -12,8 +12,8 @@ the IMU set's names and bones; its skeleton and mountings are replaced. A sensor
 that sent nothing usable in the recording is left out of the new IMU set (calibration.json
 lists it): mocapd then counts its samples as from an unknown source rather than trusting a
 mounting nobody measured. DIR receives
-session.json, skeleton.json, imus.json and calibration.json, and a copy of the session's rig,
-layout and prior files.
+session.json, skeleton.json, imus.json, layout.json (the keypoint sites, estimated) and
+calibration.json, and a copy of the session's rig and prior files.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ import numpy as np
 from mocap import _core, recording, wire
 from mocap.calibration import window
 from mocap.errors import InputError
-from mocap.solver import imu_set_json
+from mocap.solver import imu_set_json, layout_json
 from mocap.take_solve import LAYOUT_SIZES, choose_subject
 
 INVALID_ORIENTATION, INVALID_ACCELERATION = 1, 2  # ImuSample.Status bits
@@ -140,17 +140,20 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
         out.mkdir(parents=True, exist_ok=True)
         (out / "skeleton.json").write_text(cal.skeleton.to_json())
         (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
+        (out / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
         report = {"recording": str(recording_path), "session": str(session), "frames": int(keep.sum()),
                   "imus_calibrated": [s[0] for s in sensors],
                   "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
                   "window": cal.report}
         (out / "calibration.json").write_text(json.dumps(report, indent=1))
-        for key in ("rig", "layout", "prior"):  # copied: an attached session lives in a temporary folder
+        for key in ("rig", "prior"):  # copied: an attached session lives in a temporary folder
             if config.get(key):
                 source = base / config[key]
                 shutil.copyfile(source, out / source.name)
                 config[key] = source.name
-        config["skeleton"], config["imus"] = "skeleton.json", "imus.json"
-        config["solver"] = {**config.get("solver", {}), "heading_time_constant": window.HEADING_TIME_CONSTANT_S}
+        config["skeleton"], config["imus"], config["layout"] = "skeleton.json", "imus.json", "layout.json"
+        # Headings fitted to this video: tracked against it, without a baseline (solver.h).
+        config["solver"] = {**config.get("solver", {}), "heading_time_constant": window.HEADING_TIME_CONSTANT_S,
+                            "heading_baseline_s": 0.0}
         (out / "session.json").write_text(json.dumps(config, indent=1))
     return report

@@ -214,7 +214,8 @@ def _eval(args: argparse.Namespace) -> int:
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
-    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline, args.calibration)
+    cal_options = {} if args.site_std is None else {"site_std": args.site_std / 1000.0}
+    results = [evaluation.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline, args.calibration, cal_options)
                for clip in clips]
     summary = evaluation.summarise(results)
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
@@ -283,6 +284,9 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
                    help="estimated: skeleton, IMU mounting and heading from the take's first 5 s "
                         "(mocap.calibration.window); oracle: the true ones (default estimated)")
+    e.add_argument("--site-std", type=float, default=None, metavar="MM",
+                   help="estimated calibration: keep the keypoint sites' change along directions known within "
+                        "this many mm (default 2; 0: keep the layout's sites)")
     e.add_argument("--json", help="JSON file to write the results to")
     e.add_argument("--table", choices=["paper", "heading"],
                    help="paper: regenerate the paper's tables and plots on the test clips; heading: print the "

@@ -138,12 +138,14 @@ def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
-             baseline: str | None = None, calibration: str = "oracle") -> dict:
+             baseline: str | None = None, calibration: str = "oracle", calibration_options: dict | None = None) -> dict:
     """Scores the fused solver, or a baseline: "imu-only" or "triangulation" (baselines.py).
-    calibration: "oracle" (the true skeleton and IMU mounting) or "estimated" (fused solver only)."""
+    calibration: "oracle" (the true skeleton and IMU mounting) or "estimated" (fused solver
+    only; calibration_options: keyword options of window.estimate)."""
     rng = np.random.default_rng(seed)
     t = sim_take.simulate(clip, config, rng)
-    estimated = estimate_calibration(t) if calibration == "estimated" and baseline is None else None
+    estimated = (estimate_calibration(t, **(calibration_options or {}))
+                 if calibration == "estimated" and baseline is None else None)
     if baseline == "imu-only":
         solved, ms = imu_only(t), np.zeros(len(t.thetas))
     elif baseline == "triangulation":
@@ -180,7 +182,7 @@ def _bone_axis(skeleton: _core.Skeleton, bone: int) -> np.ndarray:
 def calibration_errors(t: sim_take.Take, c: window.Calibration) -> dict:
     """Estimated against true, per IMU: heading (deg), mounting (deg; in full, and the bone
     axis' direction in the sensor frame: what video observes of it), position (cm); the limb
-    lengths (cm)."""
+    lengths (cm); per keypoint the site (cm), estimated and the layout's."""
     out = {}
     for est, true in zip(c.imus, t.imus):
         turn = np.asarray(est.reference) @ np.asarray(true.reference).T
@@ -194,7 +196,14 @@ def calibration_errors(t: sim_take.Take, c: window.Calibration) -> dict:
     names = t.skeleton.bone_names
     lengths = {b: 100 * float(np.linalg.norm(c.skeleton.offsets[names.index(b)]) -
                               np.linalg.norm(t.skeleton.offsets[names.index(b)])) for b in LIMB_BONES}
-    return {"imus": out, "limb_length_cm": lengths}
+    # Keypoint sites (cm, per keypoint): the estimate's and the layout's distance from where
+    # the detector's keypoints really sit (each in its bone's frame).
+    true_sites = np.asarray(t.detector_sites)
+    sites = {n: {"estimated_cm": 100 * float(np.linalg.norm(est - true)),
+                 "layout_cm": 100 * float(np.linalg.norm(nominal - true))}
+             for n, est, nominal, true in zip(t.layout.names, np.asarray(c.layout.offsets),
+                                              np.asarray(t.layout.offsets), true_sites)}
+    return {"imus": out, "limb_length_cm": lengths, "sites": sites}
 
 
 def heading_errors_deg(t: sim_take.Take, c, tracked: np.ndarray) -> np.ndarray:

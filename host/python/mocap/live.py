@@ -23,7 +23,7 @@ from mocap import _core, demo_motion, paths, recording, transport, wire
 from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
-from mocap.solver import imu_set_json
+from mocap.solver import imu_set_json, layout_json
 from mocap_edge.streams import Streams
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
@@ -95,18 +95,19 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     streams.save(folder / "streams.npz")
     ports = free_ports(len(camera_ids) + 2)
     endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host"], ports)}
-    session_skeleton, imus = skeleton, t.imus
+    session_skeleton, imus, layout = skeleton, t.imus, str(paths.LAYOUTS / f"{t.layout.name}.json")
     if calibration == "estimated":
         cal = calibrate(streams, t.rig, [s.bone for s in t.imus])
-        session_skeleton, imus = cal.skeleton, cal.imus
+        session_skeleton, imus, layout = cal.skeleton, cal.imus, "layout.json"
         (folder / "calibration.json").write_text(json.dumps(cal.report, indent=1))
+        (folder / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
     elif calibration != "oracle":
         raise InputError(f"calibration is 'estimated' or 'oracle', not {calibration!r}")
     (folder / "skeleton.json").write_text(session_skeleton.to_json())
     (folder / "rig.json").write_text(t.rig.to_json())
     (folder / "imus.json").write_text(json.dumps(imu_set_json(session_skeleton, imus), indent=1))
     session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
-               "layout": str(paths.LAYOUTS / f"{t.layout.name}.json"), "prior": str(paths.HOST_DATA / "prior_default.json"),
+               "layout": layout, "prior": str(paths.HOST_DATA / "prior_default.json"),
                "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}
     if calibration == "estimated":
         session["solver"] = {"heading_time_constant": window.HEADING_TIME_CONSTANT_S}

@@ -28,6 +28,15 @@ def imu_set_json(skeleton: _core.Skeleton, imus) -> dict:
         for s in imus]}
 
 
+def layout_json(skeleton: _core.Skeleton, layout: _core.KeypointLayout) -> dict:
+    """A keypoint layout in the layout file format (mocap.layout/1, sites.h), its offsets as
+    they are for `skeleton` (reference_height = its rest height: loading scales by 1)."""
+    names = skeleton.bone_names
+    return {"format": "mocap.layout/1", "name": layout.name, "reference_height": skeleton.rest_height(),
+            "keypoints": [{"name": n, "bone": names[b], "offset": np.asarray(o).tolist()}
+                          for n, b, o in zip(layout.names, layout.bones, layout.offsets)]}
+
+
 def solver_options(settings: list[str]) -> _core.SolverOptions:
     """SolverOptions with "name=value" or "term.field=value" settings applied."""
     options = _core.SolverOptions()

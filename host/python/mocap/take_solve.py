@@ -22,7 +22,7 @@ from mocap.calibration import window
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
 from mocap.joint_centres import JOINTS, bone_indices
-from mocap.solver import Solver, imu_set_json
+from mocap.solver import Solver, imu_set_json, layout_json
 from mocap.take_folder import TakeFolder, read_take
 from mocap_edge.detect.openpose_json import box_size
 
@@ -83,6 +83,7 @@ def solve_take(folder: Path, out: Path) -> dict:
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
     (out / "skeleton.json").write_text(cal.skeleton.to_json())
     (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
+    (out / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
     (out / "calibration.md").write_text(_markdown(report))
     return report
 
@@ -118,7 +119,9 @@ def _markdown(r: dict) -> str:
         "| group | scale | measured | distances |", "|---|---|---|---|", rows, "",
         f"Window calibration ({w['frames']} frames of the first {w['window_s']:.1f} s, {w['iterations']} iterations, "
         f"cost {w['cost']['start']:.0f} -> {w['cost']['end']:.0f}):",
-        f"lengths {refined}; shifts {shifts}. Keypoint sites: {'estimated' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}.",
+        f"lengths {refined}; shifts {shifts}. Keypoint sites: "
+        f"{'estimated along ' + str(w['site_directions_kept']) + ' observed directions' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}"
+        f" (`layout.json`).",
         f"Calibration pose: {w['calibration_pose'] + '-pose held, ' + str(w['calibration_pose_frames']) + ' frames' if w['calibration_pose'] else 'none found'}.",
         ""]
     if w["imus"]:

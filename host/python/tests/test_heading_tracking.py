@@ -39,6 +39,6 @@ def test_tracking_keeps_drifting_headings_near_the_truth(drifting):
     last = slice(-600, None)  # the last 10 s
     before = np.median(evaluation.heading_errors_deg(t, c, fixed)[last])
     after = np.median(evaluation.heading_errors_deg(t, c, tracked)[last])
-    # Measured: median 4.3 deg with the window's headings, 3.1 tracked; joint centres 2.02 / 2.01 cm.
+    # Measured: median 3.3 deg with the window's headings, 2.1 tracked; joint centres 1.99 / 2.00 cm.
     assert after < 0.8 * before, (before, after)
     assert tracked_cm < fixed_cm + 0.02, (fixed_cm, tracked_cm)

@@ -74,3 +74,19 @@ def test_a_gap_in_the_readings_leaves_the_longest_run():
     q[::50] = np.nan  # no run long enough: nothing estimated
     placed = imu_position.estimate(SKELETON, SITE, thetas, TIMES, q, a)
     assert placed.frames == 0 and np.allclose(placed.offset, imu_position.usual_place(SKELETON, SITE.bone))
+
+
+def test_the_heading_comes_back_from_the_accelerometer():
+    """A reference told 25 degrees off in yaw: the accelerometer's horizontal part says by how
+    much, and the offset is found with the heading it settles on."""
+    thetas, q, a = motion(SKELETON, 300)
+    told = _core.ImuSite()
+    told.name, told.bone, told.mount, told.offset = SITE.name, SITE.bone, SITE.mount, SITE.offset
+    told.reference = rotations.exp(np.array([0.0, 0.0, 0.7 + np.radians(25.0)]))
+    fixed = imu_position.estimate(SKELETON, told, thetas, TIMES, q, a)
+    placed = imu_position.estimate(SKELETON, told, thetas, TIMES, q, a, heading_search=True)
+    assert abs(np.degrees(placed.heading_rad - 0.7)) < 0.2, np.degrees(placed.heading_rad)  # measured 0.0x
+    assert np.degrees(placed.heading_sigma_rad) < 2.0
+    assert np.linalg.norm(placed.offset - SITE.offset) < 0.002, placed.offset
+    assert np.linalg.norm(fixed.offset - SITE.offset) > 0.01  # the wrong heading misplaces it
+    assert np.isnan(fixed.heading_rad)

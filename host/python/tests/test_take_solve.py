@@ -82,10 +82,11 @@ def imu_errors(folder, out) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def test_imu_headings_and_observed_mountings_are_recovered(simulated):
     headings, axes, _ = imu_errors(*simulated[:2])
-    # Measured (seed 3): headings median 1.7 deg, up to 7.5, and 27.6 at the standing foot (it
-    # barely turns in the window: heading and mounting cannot be told apart); the bone axis in
-    # the sensor frame median 4 deg. The video-only start (mocap.calibration.imus) was 7-30 deg.
-    assert np.median(headings) < 3.0 and sorted(headings)[-2] < 10.0, np.round(headings, 1)
+    # Measured (seed 3): headings median 1.5 deg, up to 6.3, and 14.5 at the standing foot (it
+    # barely turns in the window, and barely accelerates: without the accelerometer's headings
+    # 27.6, and median 1.7); the bone axis in the sensor frame median 3.6 deg. The video-only
+    # start (mocap.calibration.imus) was 7-30 deg.
+    assert np.median(headings) < 2.5 and sorted(headings)[-2] < 8.0 and headings.max() < 20.0, np.round(headings, 1)
     assert np.median(axes) < 8.0, np.round(axes, 1)
 
 
@@ -93,7 +94,7 @@ def test_the_imus_make_the_joint_centres_better_than_video_alone(simulated, vide
     fused = joint_centre_errors(*simulated[:2])
     video = joint_centre_errors(*video_only[:2])
     assert video_only[2]["imus_used"] == 0
-    # Measured (4 s, seed 3): fused 2.02 cm, video only 2.34 cm (its skeleton from the same
+    # Measured (4 s, seed 3): fused 1.99 cm, video only 2.34 cm (its skeleton from the same
     # window calibration); frame-to-frame change of the error 3.5 times smaller with the IMUs.
     assert fused.mean() < 0.025 and fused.mean() < 0.9 * video.mean(), (fused.mean(), video.mean())
     jitter = lambda e: np.abs(np.diff(e, axis=0)).mean()  # noqa: E731
@@ -108,10 +109,12 @@ def test_a_held_t_pose_pins_the_mountings(simulated, tmp_path):
                     "--seed", "3", "--calibration-pose", "T"], check=True, capture_output=True)
     report = take_solve.solve_take(folder, tmp_path / "out")
     assert report["window"]["calibration_pose"] == "T"
+    change = report["solve"]["heading_change_deg"]  # the heading tracking's, at the take's end
+    assert len(change) == 13 and all(np.isfinite(v) and abs(v) < 20 for v in change.values()), change
     _, _, mounts = imu_errors(folder, tmp_path / "out")
     _, _, mounts_without = imu_errors(*simulated[:2])
-    # Measured (seed 3): mountings in full median 4.1 deg with the pose, 15.2 without (their
-    # twist is the prior's there); joint centres 1.48 cm, 2.02 without.
+    # Measured (seed 3): mountings in full median 3.6 deg with the pose, 14.7 without (their
+    # twist is the prior's there); joint centres 1.38 cm, 1.99 without.
     assert np.median(mounts) < 6.0 and np.median(mounts) < 0.5 * np.median(mounts_without), mounts.round(1)
     assert joint_centre_errors(folder, tmp_path / "out").mean() < 0.9 * joint_centre_errors(*simulated[:2]).mean()
 

@@ -10,6 +10,13 @@ same Gaussian (SMOOTH_FRAMES) before differencing, which keeps the relation exac
 pulls o towards the strap's usual place (half way along a limb segment, PRIOR_M), so a sensor
 that barely turned in the window keeps that, and a robust second pass drops frames whose
 residual is far above the median.
+
+The same relation tells the sensor's heading (the yaw of its reference frame), which the
+orientations alone do not when its segment only turns about the vertical (the pelvis, the
+head of an upright performer: heading and mounting trade there). The accelerometer's
+horizontal part turns with the heading: with heading_search, the heading is searched over the
+circle (the offset closed-form for each), and its standard deviation comes from the cost's
+curvature, widened for the smoothing's correlated residuals (CORRELATED_FRAMES).
 """
 
 from __future__ import annotations
@@ -24,6 +31,10 @@ SMOOTH_FRAMES = 4.0  # Gaussian sigma, frames
 PRIOR_M = 0.1  # ridge: sigma of the offset around the usual place, m
 ACCEL_SIGMA = 1.0  # m/s^2: the smoothed acceleration's typical misfit (the ridge's scale)
 MIN_FRAMES = 60
+# The residuals of Gaussian-smoothed series are correlated over about 2 sqrt(pi) sigma
+# frames: the heading's variance from the curvature is widened by as much.
+CORRELATED_FRAMES = 2.0 * np.sqrt(np.pi) * SMOOTH_FRAMES
+MIN_HEADING_SIGMA = np.radians(1.0)
 
 
 @dataclasses.dataclass
@@ -31,6 +42,8 @@ class ImuPosition:
     offset: np.ndarray  # (3,) m, bone frame
     frames: int  # frames used (0: the usual place, nothing estimated)
     residual_ms2: float  # median misfit of the smoothed accelerations, m/s^2
+    heading_rad: float = float("nan")  # heading_search: the reference's yaw (world z), rad
+    heading_sigma_rad: float = float("nan")  # and its standard deviation
 
 
 def usual_place(skeleton: _core.Skeleton, bone: int) -> np.ndarray:
@@ -65,11 +78,49 @@ def _second_difference(x: np.ndarray, dt: float) -> np.ndarray:
     return (x[2:] - 2 * x[1:-1] + x[:-2]) / (dt * dt)
 
 
+def _rz(psi: float) -> np.ndarray:
+    c, s = np.cos(psi), np.sin(psi)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class _Fit:
+    """G''(t) o = Rz(d) R0 Rq(t) f(t) - g - p''(t), smoothed, for a turn d of the reference R0:
+    the offset by ridge regression towards `prior`, over the frames in `use`."""
+
+    def __init__(self, a: np.ndarray, specific: np.ndarray, rest: np.ndarray, prior: np.ndarray):
+        self.a, self.specific, self.rest, self.prior = a, specific, rest, prior
+        self.lam = (ACCEL_SIGMA / PRIOR_M) ** 2
+        self.use = np.ones(len(a), bool)
+
+    def solve(self, turn: float) -> tuple[float, np.ndarray, np.ndarray]:
+        """(cost, offset, per-frame misfit) for the turn d (rad)."""
+        b = self.specific @ _rz(turn).T - self.rest
+        aa, bb = self.a[self.use].reshape(-1, 3), b[self.use].reshape(-1)
+        offset = np.linalg.solve(aa.T @ aa + self.lam * np.eye(3), aa.T @ bb + self.lam * self.prior)
+        misfit = np.linalg.norm(np.einsum("tij,j->ti", self.a, offset) - b, axis=1)
+        return float((misfit[self.use] ** 2).sum() + self.lam * np.sum((offset - self.prior) ** 2)), offset, misfit
+
+    def best_turn(self, around: float, half_width_deg: float, step_deg: float) -> float:
+        turns = around + np.radians(np.arange(-half_width_deg, half_width_deg, step_deg))
+        return float(turns[int(np.argmin([self.solve(d)[0] for d in turns]))])
+
+    def turn_sigma(self, turn: float) -> float:
+        """Standard deviation of the turn from the cost's curvature (Gauss-Newton), widened."""
+        h = np.radians(0.5)
+        c0, cp, cm = (self.solve(turn + d)[0] for d in (0.0, h, -h))
+        curvature = max((cp + cm - 2.0 * c0) / (h * h), 1e-12)
+        variance = c0 / max(3 * int(self.use.sum()) - 4, 1)  # per residual
+        return max(float(np.sqrt(2.0 * variance * CORRELATED_FRAMES / curvature)), MIN_HEADING_SIGMA)
+
+
 def estimate(skeleton: _core.Skeleton, site: _core.ImuSite, thetas: np.ndarray, times: np.ndarray,
-             quaternions: np.ndarray, accelerations: np.ndarray, gravity: float = 9.80665) -> ImuPosition:
+             quaternions: np.ndarray, accelerations: np.ndarray, gravity: float = 9.80665,
+             heading_search: bool = False) -> ImuPosition:
     """The offset of one IMU (mount and reference calibrated) from consecutive frames' poses
     thetas (T, 66) at times (T,), and its readings there: quaternions (T, 4) w, x, y, z and
-    accelerations (T, 3) sensor frame."""
+    accelerations (T, 3) sensor frame; with heading_search also the heading that best
+    explains the accelerations (the reference turned about world z), which the offset is
+    then solved with."""
     prior = usual_place(skeleton, site.bone)
     ok = np.isfinite(quaternions).all(axis=1) & np.isfinite(accelerations).all(axis=1) & np.isfinite(thetas).all(axis=1)
     lo, hi = longest_run(ok)  # the filter needs an unbroken run
@@ -80,15 +131,21 @@ def estimate(skeleton: _core.Skeleton, site: _core.ImuSite, thetas: np.ndarray, 
     fk = [skeleton.forward_kinematics(t) for t in thetas]
     g = np.array([r[site.bone] for r, _ in fk])
     p = np.array([x[site.bone] for _, x in fk])
-    sensor_world = np.asarray(site.reference) @ rotations.matrix_from_quaternion(quaternions)
-    accel_world = np.einsum("tij,tj->ti", sensor_world, accelerations) - np.array([0.0, 0.0, gravity])
-    a = _second_difference(_smooth(g, SMOOTH_FRAMES), dt)  # (T', 3, 3)
-    b = _smooth(accel_world, SMOOTH_FRAMES)[1:-1] - _second_difference(_smooth(p, SMOOTH_FRAMES), dt)
-    use = np.ones(len(a), bool)
-    lam = (ACCEL_SIGMA / PRIOR_M) ** 2
-    for _ in range(2):
-        aa, bb = a[use].reshape(-1, 3), b[use].reshape(-1)
-        offset = np.linalg.solve(aa.T @ aa + lam * np.eye(3), aa.T @ bb + lam * prior)
-        misfit = np.linalg.norm(np.einsum("tij,j->ti", a, offset) - b, axis=1)
-        use = misfit <= 3.0 * np.median(misfit)
-    return ImuPosition(offset, int(use.sum()), float(np.median(misfit[use])))
+    reference = np.asarray(site.reference)
+    specific = np.einsum("ij,tjk,tk->ti", reference, rotations.matrix_from_quaternion(quaternions), accelerations)
+    fit = _Fit(_second_difference(_smooth(g, SMOOTH_FRAMES), dt),  # (T', 3, 3)
+               _smooth(specific, SMOOTH_FRAMES)[1:-1],
+               np.array([0.0, 0.0, gravity]) + _second_difference(_smooth(p, SMOOTH_FRAMES), dt), prior)
+    turn = fit.best_turn(0.0, 180.0, 2.0) if heading_search else 0.0
+    for _ in range(2):  # a robust second pass
+        _, offset, misfit = fit.solve(turn)
+        fit.use = misfit <= 3.0 * np.median(misfit)
+        if heading_search:
+            turn = fit.best_turn(turn, 2.0, 0.05)
+    _, offset, misfit = fit.solve(turn)
+    placed = ImuPosition(offset, int(fit.use.sum()), float(np.median(misfit[fit.use])))
+    if heading_search:
+        turned = _rz(turn) @ reference
+        placed.heading_rad = float(np.arctan2(turned[1, 0], turned[0, 0]))
+        placed.heading_sigma_rad = fit.turn_sigma(turn)
+    return placed

