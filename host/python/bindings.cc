@@ -456,6 +456,7 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("imu_residual_deg", &CalibrationResult::imu_residual_deg)
       .def_readonly("keypoint_observations", &CalibrationResult::keypoint_observations)
       .def_readonly("site_directions_kept", &CalibrationResult::site_directions_kept)
+      .def_readonly("site_directions", &CalibrationResult::site_directions)
       .def_readonly("initial_cost", &CalibrationResult::initial_cost)
       .def_readonly("final_cost", &CalibrationResult::final_cost)
       .def_readonly("iterations", &CalibrationResult::iterations)

@@ -312,7 +312,7 @@ std::vector<double> ImuResidualsDeg(const CalibrationResult& r, const Unknowns& 
 // (a rank-deficient window), the sites stay at sites0.
 void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>& sites0,
                              ceres::Problem* problem, std::vector<Eigen::Vector3d>* sites,
-                             int* kept) {
+                             int* kept, Eigen::MatrixXd* directions) {
   std::vector<const double*> blocks;
   std::vector<int> keypoints;
   for (size_t k = 0; k < sites->size(); ++k) {
@@ -322,6 +322,7 @@ void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>&
     }
   }
   *kept = 0;
+  *directions = Eigen::MatrixXd::Zero(3 * static_cast<int>(sites->size()), 0);
   if (blocks.empty()) return;
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::SPARSE_QR;
@@ -342,13 +343,19 @@ void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>&
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
   const Eigen::VectorXd& variance = eig.eigenvalues();
   Eigen::VectorXd kept_change = Eigen::VectorXd::Zero(n);
-  *kept = 0;
+  std::vector<int> columns;
   for (int i = 0; i < n; ++i) {
     if (variance(i) < max_std * max_std) {
       const Eigen::VectorXd v = eig.eigenvectors().col(i);
       kept_change += v * v.dot(change);
-      ++*kept;
+      columns.push_back(i);
     }
+  }
+  *kept = static_cast<int>(columns.size());
+  directions->setZero(3 * static_cast<int>(sites->size()), *kept);
+  for (int c = 0; c < *kept; ++c) {
+    for (size_t j = 0; j < keypoints.size(); ++j)
+      directions->block<3, 1>(3 * keypoints[j], c) = eig.eigenvectors().block(3 * j, columns[c], 3, 1);
   }
   for (size_t j = 0; j < keypoints.size(); ++j) {
     (*sites)[keypoints[j]] = sites0[keypoints[j]] + kept_change.segment<3>(3 * j);
@@ -395,7 +402,7 @@ bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLay
 
   if (options.estimate_sites && options.site_observable_std > 0.0) {
     KeepObservedSiteChanges(options.site_observable_std, sites0, &window.problem(), &x.sites,
-                            &result->site_directions_kept);
+                            &result->site_directions_kept, &result->site_directions);
   }
   if (!AdjustedSkeleton(skeleton, options, x, &result->skeleton, error)) return false;
   result->thetas = x.thetas;

@@ -87,6 +87,9 @@ struct CalibrationResult {
   std::vector<Eigen::Vector3d> shifts;     // per shift group, m (of its first bone)
   std::vector<Eigen::VectorXd> thetas;     // the window's poses
   int site_directions_kept = 0;            // of 3 x keypoints (site_observable_std)
+  // (3 x keypoints) x site_directions_kept: the kept directions, orthonormal (keypoint k's
+  // rows 3k..3k+2, its offset in its bone's frame): what the window observes of the sites.
+  Eigen::MatrixXd site_directions;
   std::vector<double> imu_residual_deg;    // median |E_R angle| per IMU (NaN: unseen)
   std::vector<int> keypoint_observations;  // per keypoint: detections used
   double initial_cost = 0, final_cost = 0;

@@ -198,11 +198,16 @@ def calibration_errors(t: sim_take.Take, c: window.Calibration) -> dict:
                               np.linalg.norm(t.skeleton.offsets[names.index(b)])) for b in LIMB_BONES}
     # Keypoint sites (cm, per keypoint): the estimate's and the layout's distance from where
     # the detector's keypoints really sit (each in its bone's frame).
+    # "observed": the same along the directions the window observed (c.site_directions), the
+    # part of each error the calibration could remove.
     true_sites = np.asarray(t.detector_sites)
-    sites = {n: {"estimated_cm": 100 * float(np.linalg.norm(est - true)),
-                 "layout_cm": 100 * float(np.linalg.norm(nominal - true))}
-             for n, est, nominal, true in zip(t.layout.names, np.asarray(c.layout.offsets),
-                                              np.asarray(t.layout.offsets), true_sites)}
+    estimated, nominal = np.asarray(c.layout.offsets) - true_sites, np.asarray(t.layout.offsets) - true_sites
+    d = c.site_directions if c.site_directions.size else np.zeros((estimated.size, 0))
+    along = lambda e: (d @ (d.T @ e.reshape(-1))).reshape(-1, 3)  # noqa: E731
+    sites = {n: {"estimated_cm": 100 * float(np.linalg.norm(e)), "layout_cm": 100 * float(np.linalg.norm(e0)),
+                 "observed_estimated_cm": 100 * float(np.linalg.norm(oe)),
+                 "observed_layout_cm": 100 * float(np.linalg.norm(oe0))}
+             for n, e, e0, oe, oe0 in zip(t.layout.names, estimated, nominal, along(estimated), along(nominal))}
     return {"imus": out, "limb_length_cm": lengths, "sites": sites}
 
 

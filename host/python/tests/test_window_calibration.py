@@ -71,12 +71,15 @@ def test_keypoint_sites_are_estimated_where_the_window_observes_them():
         c = evaluation.estimate_calibration(t, site_std=std)
         solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
         sites = evaluation.calibration_errors(t, c)["sites"].values()
-        results[std] = (c.report["site_directions_kept"], np.median([s["estimated_cm"] for s in sites]),
-                        np.median([s["layout_cm"] for s in sites]),
+        results[std] = (c.report["site_directions_kept"],
+                        *(np.median([s[k] for s in sites]) for k in ("estimated_cm", "layout_cm",
+                                                                     "observed_estimated_cm", "observed_layout_cm")),
                         evaluation.errors(t.skeleton, t.thetas, solved, dt, c.skeleton)["joint_centres_pos_cm"])
-    (kept0, _, _, centres0), (kept, estimated, layout, centres) = results.values()
+    (kept0, *_, centres0), (kept, estimated, layout, observed, observed_layout, centres) = results.values()
     # Measured (seed 4, 6 s): 82 of 99 directions kept; sites median 2.1 -> 1.2 cm from the
-    # detector's; joint centres 2.10 -> 2.09 cm (the 8 test clips: 2.09 -> 2.04 cm).
+    # detector's, along the kept directions 1.9 -> 0.8 cm; joint centres 2.10 -> 2.09 cm (the 8
+    # test clips: 2.09 -> 2.04 cm).
     assert kept0 == 0 and kept > 50, (kept0, kept)
     assert estimated < 0.7 * layout, (estimated, layout)
+    assert observed < 1.0 and observed < 0.5 * observed_layout, (observed, observed_layout)
     assert centres < centres0 + 0.02, (centres0, centres)

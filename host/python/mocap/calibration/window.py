@@ -96,6 +96,7 @@ class Calibration:
     report: dict
     window_frames: np.ndarray  # (W,) the frames of the joint solve
     window_thetas: np.ndarray  # (W, 66) their poses, with the estimated skeleton
+    site_directions: np.ndarray  # (3 x keypoints, kept): the sites' directions step 4b observed
 
 
 def solver_options(options: _core.SolverOptions | None = None) -> _core.SolverOptions:
@@ -273,8 +274,8 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
             options.heading_priors = [np.array(accelerometer[s.name]) for s in sites]
             result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
-        sites_layout, thetas, kept = (_estimate_sites(result, rig, frames, options, site_std) if estimate_sites
-                                      else (result.layout, result.thetas, 0))
+        sites_layout, thetas, directions = (_estimate_sites(result, rig, frames, options, site_std)
+                                            if estimate_sites else (result.layout, result.thetas, np.zeros((0, 0))))
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
     report = {
@@ -284,7 +285,7 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         "scales_start": start.scales,  # step 1, of the default skeleton's groups
         "scales_window": dict(zip(LENGTH_GROUPS, (float(s) for s in result.scales))),  # step 4, of step 1's
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
-        "sites_estimated": estimate_sites, "site_directions_kept": kept,
+        "sites_estimated": estimate_sites, "site_directions_kept": int(directions.shape[1]),
         "calibration_pose": pose_name, "calibration_pose_frames": len(options.held_poses),
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
@@ -294,14 +295,15 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     imus = list(result.imus)
     report["imu_positions"] = _place_imus(result.skeleton, rig, sites_layout, imus, detections[:window],
                                           times[:window], readings, dense)
-    return Calibration(result.skeleton, sites_layout, imus, start, report, np.array(used), np.array(thetas))
+    return Calibration(result.skeleton, sites_layout, imus, start, report, np.array(used), np.array(thetas),
+                       directions)
 
 
 def _estimate_sites(first, rig: _core.Rig, frames: list, options: _core.CalibrationOptions,
                     site_std: float) -> tuple:
     """Step 4b: the keypoint sites, with the skeleton, mountings and headings of step 4 held
     and the window's poses free, kept only along the directions the window knows within
-    site_std (m): (layout, window poses, directions kept)."""
+    site_std (m): (layout, window poses, the kept directions (3 x keypoints, kept))."""
     o = _core.CalibrationOptions()
     o.terms, o.held_poses, o.joint_sigmas = options.terms, options.held_poses, options.joint_sigmas
     o.estimate_scales = o.estimate_shifts = o.estimate_mounts = o.estimate_headings = False
@@ -309,7 +311,7 @@ def _estimate_sites(first, rig: _core.Rig, frames: list, options: _core.Calibrat
     o.site_observable_std = site_std
     second = _core.calibrate_window(first.skeleton, rig, first.layout, list(first.imus), prior.load(), frames,
                                     list(first.thetas), o)
-    return second.layout, second.thetas, second.site_directions_kept
+    return second.layout, second.thetas, np.asarray(second.site_directions)
 
 
 def _accelerometer_report(yaw: float, sigma: float) -> dict:
