@@ -355,7 +355,8 @@ void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>&
   directions->setZero(3 * static_cast<int>(sites->size()), *kept);
   for (int c = 0; c < *kept; ++c) {
     for (size_t j = 0; j < keypoints.size(); ++j)
-      directions->block<3, 1>(3 * keypoints[j], c) = eig.eigenvectors().block(3 * j, columns[c], 3, 1);
+      directions->block<3, 1>(3 * keypoints[j], c) =
+          eig.eigenvectors().block(3 * j, columns[c], 3, 1);
   }
   for (size_t j = 0; j < keypoints.size(); ++j) {
     (*sites)[keypoints[j]] = sites0[keypoints[j]] + kept_change.segment<3>(3 * j);

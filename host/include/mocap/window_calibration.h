@@ -80,13 +80,13 @@ struct CalibrationOptions {
 };
 
 struct CalibrationResult {
-  Skeleton skeleton;                       // offsets scaled
-  KeypointLayout layout;                   // sites estimated
-  std::vector<ImuSite> imus;               // mount and reference estimated (offset unchanged)
-  std::vector<double> scales;              // per length group, relative to the given skeleton
-  std::vector<Eigen::Vector3d> shifts;     // per shift group, m (of its first bone)
-  std::vector<Eigen::VectorXd> thetas;     // the window's poses
-  int site_directions_kept = 0;            // of 3 x keypoints (site_observable_std)
+  Skeleton skeleton;                    // offsets scaled
+  KeypointLayout layout;                // sites estimated
+  std::vector<ImuSite> imus;            // mount and reference estimated (offset unchanged)
+  std::vector<double> scales;           // per length group, relative to the given skeleton
+  std::vector<Eigen::Vector3d> shifts;  // per shift group, m (of its first bone)
+  std::vector<Eigen::VectorXd> thetas;  // the window's poses
+  int site_directions_kept = 0;         // of 3 x keypoints (site_observable_std)
   // (3 x keypoints) x site_directions_kept: the kept directions, orthonormal (keypoint k's
   // rows 3k..3k+2, its offset in its bone's frame): what the window observes of the sites.
   Eigen::MatrixXd site_directions;
