@@ -108,7 +108,10 @@ def _markdown(r: dict) -> str:
     refined = ", ".join(f"{g} x{s:.3f}" for g, s in w["scales_window"].items())
     shifts = ", ".join(f"{g} ({', '.join(f'{100 * v:+.1f}' for v in d)}) cm" for g, d in w["shifts_window_m"].items())
     change = r["solve"]["heading_change_deg"]
-    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {change[name]:+.1f} | {i['first_residual_deg']:.1f} | "
+    accel = lambda i: ("-" if i["heading_accelerometer_deg"] is None  # noqa: E731
+                       else f"{i['heading_accelerometer_deg']:.1f} ± {i['heading_accelerometer_sigma_deg']:.1f}")
+    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {accel(i)} | {change[name]:+.1f} | "
+                     f"{i['first_residual_deg']:.1f} | "
                       f"{i['residual_deg']:.2f} | {', '.join(f'{100 * v:.1f}' for v in w['imu_positions'][name]['offset_m'])} | "
                       f"{'estimated' if w['imu_positions'][name]['estimated'] else 'usual place'} |"
                       for name, i in w["imus"].items())
@@ -125,9 +128,10 @@ def _markdown(r: dict) -> str:
         f"Calibration pose: {w['calibration_pose'] + '-pose held, ' + str(w['calibration_pose_frames']) + ' frames' if w['calibration_pose'] else 'none found'}.",
         ""]
     if w["imus"]:
-        lines += ["Heading: from the window; change: the heading tracking's correction at the take's end.", "",
-                  "| sensor | bone | heading (deg) | change (deg) | start residual (deg) | residual (deg) | offset (cm) | "
-                  "position |", "|---|---|---|---|---|---|---|---|", imus, ""]
+        lines += ["Heading: from the window, with the accelerometer's (± its standard deviation) as a prior; change: "
+                  "the heading tracking's correction at the take's end.", "",
+                  "| sensor | bone | heading (deg) | accelerometer (deg) | change (deg) | start residual (deg) | "
+                  "residual (deg) | offset (cm) | position |", "|---|---|---|---|---|---|---|---|---|", imus, ""]
     else:
         lines += ["No IMUs: a video-only solve.", ""]
     lines += [f"Solve: {r['frames']} frames, {r['imus_used']} IMUs; statuses {r['solve']['statuses']}.", ""]
