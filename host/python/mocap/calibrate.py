@@ -1,8 +1,10 @@
 """`mocap calibrate --recording FILE [--session S] --out DIR`: a live session whose skeleton
-and IMU sites are estimated from the first seconds of a recording of the studio's streams
-(`mocap record`), so that mocapd captures without oracle calibration. With `--connect EP...
---session S` it records those seconds from the running edge boxes and IMU hubs first
-(DIR/calibration.mcap, kept), then calibrates from them: `mocapd DIR/session.json` captures.
+and IMU sites are estimated from a few seconds of a recording of the studio's streams
+(`mocap record`), so that mocapd captures without oracle calibration: the first seconds in
+which the IMUs move enough (mocap.calibration.informative; a performer standing still leaves
+their headings undetermined). With `--connect EP... --session S` it records from the running
+edge boxes and IMU hubs first (DIR/calibration.mcap, kept), until the last seconds had that
+motion (at most max_seconds), then calibrates from them: `mocapd DIR/session.json` captures.
 
 Camera frames are grouped by capture time (each camera's frame nearest a reference camera's
 within half a frame period); the subject is chosen per camera as for take folders; IMU
@@ -29,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, recording, wire
-from mocap.calibration import window
+from mocap.calibration import informative, window
 from mocap.errors import InputError
 from mocap.solver import imu_set_json, layout_json
 from mocap.take_solve import LAYOUT_SIZES, choose_subject
@@ -77,17 +79,26 @@ def _frames(cams: dict, camera_names: list[str], k: int) -> tuple[np.ndarray, np
 
 
 def record_window(endpoints: list[str], path: Path, session: Path, seconds: float = window.SECONDS,
-                  timeout_s: float = 60.0) -> recording.Counts:
+                  timeout_s: float = 60.0, max_seconds: float = 30.0) -> recording.Counts:
     """Records the streams at `endpoints` until `seconds` (and a margin of 1.5 s) have passed
-    since the first message; InputError if nothing came within timeout_s."""
+    since the first message and the IMUs moved enough in the last `seconds`
+    (informative.GOOD_SCORE_DEG; no IMU: at once), or max_seconds have; InputError if nothing
+    came within timeout_s."""
     stop = threading.Event()
-    seen = {"first": None, "last": None}  # monotonic times of the first and the latest message
+    seen = {"first": None, "last": None, "checked": 0.0}  # monotonic times
+    motion = MotionWatch(seconds)
 
-    def on_record(_topic: str) -> None:
+    def on_record(_topic: str, message) -> None:
         seen["last"] = time.monotonic()
         seen["first"] = seen["first"] or seen["last"]
-        if seen["last"] - seen["first"] > seconds + 1.5:
-            stop.set()
+        if isinstance(message, wire.ImuBatch):
+            motion.add(message)
+        elapsed = seen["last"] - seen["first"]
+        if elapsed > seconds + 1.5 and seen["last"] - seen["checked"] > 0.5:
+            seen["checked"] = seen["last"]
+            score = motion.score()
+            if not np.isfinite(score) or score >= informative.GOOD_SCORE_DEG or elapsed > max_seconds + 1.5:
+                stop.set()
 
     timer = threading.Timer(timeout_s, stop.set)
     timer.start()
@@ -99,6 +110,30 @@ def record_window(endpoints: list[str], path: Path, session: Path, seconds: floa
         raise InputError(f"{' '.join(endpoints)}: {'nothing' if seen['first'] is None else 'too little'} received in "
                          f"{timeout_s:.0f} s; are the edge boxes and hubs publishing there?")
     return counts
+
+
+class MotionWatch:
+    """The IMUs' motion score (informative.window_score) over the last `seconds` of live samples."""
+
+    def __init__(self, seconds: float):
+        self.seconds = seconds
+        self.samples: dict[str, list[tuple[int, list[float]]]] = defaultdict(list)  # sensor -> (ns, wxyz)
+
+    def add(self, batch) -> None:
+        for s in batch.samples:
+            if not s.status & INVALID_ORIENTATION:
+                self.samples[s.sensor_id].append((s.sample_time_ns, [s.qw, s.qx, s.qy, s.qz]))
+
+    def score(self) -> float:
+        """NaN when no IMU sent anything."""
+        spreads = []
+        for name, rows in self.samples.items():
+            newest = rows[-1][0]
+            self.samples[name] = rows = [r for r in rows if r[0] >= newest - self.seconds * 1e9]
+            q = np.array([r[1] for r in rows], dtype=float)
+            q /= np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-12)
+            spreads.append(informative.tilt_spread_deg(q[:, None])[0])
+        return float(np.nanmedian(spreads)) if np.isfinite(spreads).any() else float("nan")
 
 
 def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS) -> dict:
@@ -120,7 +155,6 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
             raise InputError(f"{recording_path}: no camera frame with detections of the session's cameras")
         times_ns, det = _frames(cams, names, LAYOUT_SIZES[layout])
         t0 = times_ns[0]
-        keep = times_ns - t0 <= (seconds + 1.0) * 1e9  # the window and a margin
         sensors = []
         for s in imu_set:
             rows = samples.get(s.name, [])
@@ -134,14 +168,19 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
             ok = np.isfinite(q).all(axis=1) & np.isfinite(a).all(axis=1)
             if ok.sum() >= 2:
                 sensors.append((s.name, s.bone, (t[ok] - t0) * 1e-9, q[ok], a[ok]))
-        frame_times = (times_ns[keep] - t0) * 1e-9
+        frame_times = (times_ns - t0) * 1e-9
         readings = window.readings_at(frame_times, sensors) if sensors else None
-        cal = window.estimate(rig, det[keep], frame_times, layout, readings, seconds=seconds)
+        first, score, why_not = informative.calibration_window(det, frame_times, readings, seconds)
+        if why_not:
+            raise InputError(f"{recording_path}: {why_not.split(';')[0]}: the performer should move (walk, "
+                             f"swing the arms, bend) while the studio calibrates")
+        cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, start=first)
         out.mkdir(parents=True, exist_ok=True)
         (out / "skeleton.json").write_text(cal.skeleton.to_json())
         (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
         (out / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
-        report = {"recording": str(recording_path), "session": str(session), "frames": int(keep.sum()),
+        report = {"recording": str(recording_path), "session": str(session), "frames": len(frame_times),
+                  "window_motion_score_deg": score,
                   "imus_calibrated": [s[0] for s in sensors],
                   "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
                   "window": cal.report}

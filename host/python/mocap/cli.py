@@ -103,7 +103,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         if not args.session:
             raise InputError("--connect needs --session: the rig, layout and IMU set to calibrate")
         recorded.parent.mkdir(parents=True, exist_ok=True)
-        calibrate.record_window(args.connect, recorded, Path(args.session), args.seconds)
+        calibrate.record_window(args.connect, recorded, Path(args.session), args.seconds,
+                                max_seconds=args.max_seconds)
     report = calibrate.calibrate(recorded, Path(args.out), Path(args.session) if args.session else None,
                                  args.seconds)
     print(json.dumps({"session": str(Path(args.out) / "session.json"), "frames": report["frames"],
@@ -155,7 +156,7 @@ def _simulate(args: argparse.Namespace) -> int:
     from mocap.sim import take_out
 
     print(json.dumps(take_out.run(Path(args.take_out), args.seconds, args.preset, args.seed,
-                                  args.calibration_pose)), flush=True)
+                                  args.calibration_pose, args.still_start)), flush=True)
     return 0
 
 
@@ -311,14 +312,17 @@ def build_parser() -> argparse.ArgumentParser:
     d.set_defaults(func=_demo)
 
     ca = sub.add_parser("calibrate", help="a live session whose skeleton and IMU mounting, heading and position are "
-                        "estimated from the first seconds of a recording or of the live streams (docs/calibration.md)")
+                        "estimated from the first seconds with motion of a recording or of the live streams "
+                        "(docs/calibration.md)")
     ca.add_argument("--recording", help="MCAP file of `mocap record` / `mocap demo --record`")
-    ca.add_argument("--connect", nargs="+", metavar="EP", help="instead: record the first seconds live from these "
-                    "publishers (edge boxes, IMU hubs; needs --session), kept as OUT/calibration.mcap")
+    ca.add_argument("--connect", nargs="+", metavar="EP", help="instead: record live from these publishers (edge "
+                    "boxes, IMU hubs; needs --session) until the IMUs moved enough, kept as OUT/calibration.mcap")
     ca.add_argument("--session", default=None, help="session giving rig, layout, IMU names and bones, endpoints "
                     "(default: the one attached to the recording)")
     ca.add_argument("--out", required=True, help="folder for the calibrated session (session.json and its files)")
     ca.add_argument("--seconds", type=float, default=5.0, help="length of the calibration window (default 5)")
+    ca.add_argument("--max-seconds", type=float, default=30.0,
+                    help="--connect: stop recording after this long even if the IMUs barely moved (default 30)")
     ca.set_defaults(func=_calibrate)
 
     sm = sub.add_parser("simulate", help="simulate a take of the demo motion (cameras + IMUs) and write it as a "
@@ -331,6 +335,9 @@ def build_parser() -> argparse.ArgumentParser:
     sm.add_argument("--calibration-pose", choices=["T", "N"],
                     help="start with 1 s of a T-pose (arms out) or N-pose (arms down) and a 0.5 s blend "
                          "into the motion: the calibration uses it (docs/calibration.md)")
+    sm.add_argument("--still-start", type=float, default=0.0, metavar="S",
+                    help="the performer stands still for S seconds first (a pose of the motion), then moves: "
+                         "the calibration waits for motion (docs/calibration.md)")
     sm.set_defaults(func=_simulate)
 
     de = sub.add_parser("detect", help="the edge keypoint detector (BlazePose, region tracking) on a video: "

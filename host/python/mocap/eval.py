@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap import _core, baselines, joint_centres, rotations, studio
-from mocap.calibration import window
+from mocap.calibration import informative, window
 from mocap.sim import take as sim_take
 from mocap.solver import Solver, solver_options
 
@@ -41,13 +41,13 @@ def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Ca
     c = calibration
     solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
               else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
-    sensors = list(range(len(t.imus)))
+    sensors = list(range(len(t.imus) if c is None else len(c.imus)))  # a calibration may leave them out
     thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
     for f in range(len(t.thetas)):
         kp = t.keypoints[f]
         cams = list(range(len(t.rig.cameras))) if kp is not None else []
         kp = kp if kp is not None else np.zeros((0, len(t.layout), 3))
-        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f], t.accelerations[f])
+        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f, sensors], t.accelerations[f, sensors])
         thetas[f], ms[f] = r.theta, r.solve_time_ms
         if headings is not None:
             headings.append(list(solver.headings))
@@ -127,14 +127,17 @@ def floor_cm(t: sim_take.Take) -> float:
 
 
 def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
-    """The take's calibration from its own first seconds (mocap.calibration.window, with its
-    keyword options): nothing of the truth is used (the IMU readings' reference frames are
-    treated as unknown too)."""
+    """The take's calibration from its own seconds (mocap.calibration.window, with its keyword
+    options), chosen as `mocap solve --take` chooses them (informative.calibration_window):
+    nothing of the truth is used (the IMU readings' reference frames are treated as unknown
+    too). IMUs too still to calibrate are left out (the calibration has none)."""
     cams, k = len(t.rig.cameras), len(t.layout)
     det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
     readings = window.ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions,
                                   t.accelerations)
-    return window.estimate(t.rig, det, t.times, t.layout.name, readings, **options)
+    start, _, why_not = informative.calibration_window(det, t.times, readings, options.get("seconds", window.SECONDS))
+    return window.estimate(t.rig, det, t.times, t.layout.name, None if why_not else readings,
+                           **{"start": start, **options})
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),

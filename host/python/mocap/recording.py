@@ -31,6 +31,7 @@ from typing import BinaryIO
 
 import zmq
 from google.protobuf import descriptor_pb2
+from google.protobuf.message import Message
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.writer import Writer
@@ -97,8 +98,9 @@ SESSION_FILES = ("skeleton", "rig", "layout", "imus", "prior")
 class Recorder:
     """Writes well-formed mocap.v1 messages to an MCAP file; counts and skips the others."""
 
-    def __init__(self, path: str | Path, on_record: Callable[[str], None] | None = None):
-        """on_record, if given, is called with the topic of every recorded message (progress, tests)."""
+    def __init__(self, path: str | Path, on_record: Callable[[str, Message], None] | None = None):
+        """on_record, if given, is called with the topic and the decoded message of every
+        recorded message (progress, a calibration's watch on the motion, tests)."""
         self._on_record = on_record
         self._writer = Writer(str(path))
         self._writer.start(profile="protobuf", library="mocap recording")
@@ -121,7 +123,7 @@ class Recorder:
                                  data=bytes(frames[1]), publish_time=max(own_time_ns, 0))  # MCAP times are unsigned
         self.recorded[topic] += 1
         if self._on_record is not None:
-            self._on_record(topic)
+            self._on_record(topic, message)
         return True
 
     def attach_session(self, session: str | Path) -> None:
@@ -164,7 +166,7 @@ class Recorder:
 
 
 def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
-           stop: threading.Event | None = None, on_record: Callable[[str], None] | None = None,
+           stop: threading.Event | None = None, on_record: Callable[[str, Message], None] | None = None,
            session: str | Path | None = None) -> Counts:
     """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is
     set; with the session's files attached when given."""

@@ -1,8 +1,9 @@
 """`mocap solve --take DIR --out OUTDIR`: a take folder (docs/take_format.md) solved
 without oracles: the subject chosen per camera and frame, the calibration estimated from
-the take's first seconds (mocap.calibration.window: skeleton, IMU mountings, headings and
-positions), then every frame solved with the IMUs (E_R, E_P, E_A and the prior), or video
-only when the take has no IMUs.
+the take's first 5 s with enough motion (mocap.calibration.informative: where the IMUs
+tilt; the first 5 s without IMUs) by mocap.calibration.window (skeleton, keypoint sites, IMU
+mountings, headings and positions), then every frame solved with the IMUs (E_R, E_P, E_A and
+the prior), or video only when the take has no IMUs or they never move enough to calibrate.
 
 Writes OUTDIR/joints.csv (frame, time_s, then <joint>_x, _y, _z in metres in the take's
 world frame: joint centres of the solved skeleton), OUTDIR/take.bvh, OUTDIR/skeleton.json and
@@ -18,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, paths
-from mocap.calibration import window
+from mocap.calibration import informative, window
 from mocap.errors import InputError
 from mocap.export.bvh import write_bvh
 from mocap.joint_centres import JOINTS, bone_indices
@@ -65,7 +66,10 @@ def solve_take(folder: Path, out: Path) -> dict:
     bones = _core.Skeleton.load(str(paths.DEFAULT_SKELETON)).bone_names
     readings = window.readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
                                           for m in take.imus]) if take.imus else None
-    cal = window.estimate(take.rig, det, times, take.layout, readings)
+    first, score, why_not = informative.calibration_window(det, times, readings, window.SECONDS)
+    if why_not:
+        readings = None
+    cal = window.estimate(take.rig, det, times, take.layout, readings, start=first)
     solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
     thetas, statuses = window.solve_frames(solver, det, times, readings)
     out.mkdir(parents=True, exist_ok=True)
@@ -73,8 +77,10 @@ def solve_take(folder: Path, out: Path) -> dict:
     write_bvh(out / "take.bvh", cal.skeleton, thetas, take.frame_rate)
     start = cal.skeleton_start
     report = {"frames": take.n_frames, "frame_rate": take.frame_rate, "cameras": len(take.rig.cameras),
-              "layout": take.layout, "imus_used": len(cal.imus),
-              "skeleton": {"from_frames": int(np.searchsorted(times, window.SECONDS)), "scales": start.scales,
+              "layout": take.layout, "imus_used": len(cal.imus), "imus_not_used_because": why_not,
+              "window_motion_score_deg": score,
+              "skeleton": {"from_frames": int(np.searchsorted(times, times[first] + window.SECONDS) - first),
+                           "scales": start.scales,
                            "lengths_m": start.lengths_m, "frames_per_length": start.frames},
               "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)},
                                               # the heading tracking's correction at the take's end
@@ -117,10 +123,13 @@ def _markdown(r: dict) -> str:
                       for name, i in w["imus"].items())
     lines = [
         "# Calibration report", "",
-        f"Skeleton, first estimate: the first {r['skeleton']['from_frames']} frames (triangulated keypoints,",
+        f"Skeleton, first estimate: {r['skeleton']['from_frames']} frames from {w['window_start_s']:.1f} s "
+        "(triangulated keypoints,",
         "median distances, left and right pooled), as scales of the default skeleton's bone groups:", "",
         "| group | scale | measured | distances |", "|---|---|---|---|", rows, "",
-        f"Window calibration ({w['frames']} frames of the first {w['window_s']:.1f} s, {w['iterations']} iterations, "
+        f"Window calibration ({w['frames']} frames of the {w['window_s']:.1f} s from {w['window_start_s']:.1f} s"
+        f"{'' if r['window_motion_score_deg'] is None else ', IMUs tilting ' + format(r['window_motion_score_deg'], '.1f') + ' deg RMS'}"
+        f", {w['iterations']} iterations, "
         f"cost {w['cost']['start']:.0f} -> {w['cost']['end']:.0f}):",
         f"lengths {refined}; shifts {shifts}. Keypoint sites: "
         f"{'estimated along ' + str(w['site_directions_kept']) + ' observed directions' if w['sites_estimated'] else 'the layout' + chr(39) + 's'}"
@@ -133,6 +142,7 @@ def _markdown(r: dict) -> str:
                   "| sensor | bone | heading (deg) | accelerometer (deg) | change (deg) | start residual (deg) | "
                   "residual (deg) | offset (cm) | position |", "|---|---|---|---|---|---|---|---|---|", imus, ""]
     else:
-        lines += ["No IMUs: a video-only solve.", ""]
+        lines += [f"IMUs not used: {r['imus_not_used_because']}." if r["imus_not_used_because"]
+                  else "No IMUs: a video-only solve.", ""]
     lines += [f"Solve: {r['frames']} frames, {r['imus_used']} IMUs; statuses {r['solve']['statuses']}.", ""]
     return "\n".join(lines)

@@ -110,7 +110,7 @@ def test_record_over_zeromq_keeps_everything_sent_after_joining(tmp_path):
     with zmq.Context() as context, transport.publisher(context, "tcp://127.0.0.1:*") as publisher:
         endpoint = publisher.getsockopt_string(zmq.LAST_ENDPOINT)
         thread = threading.Thread(target=lambda: results.append(recording.record(
-            [endpoint], path, stop=stop, on_record=lambda t: markers[t].set() if t in markers else None)))
+            [endpoint], path, stop=stop, on_record=lambda t, _: markers[t].set() if t in markers else None)))
         thread.start()
         try:
             for _ in range(int(TIMEOUT_S / 0.01)):  # warm-up: until the recorder has seen a message

@@ -218,10 +218,19 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
 
 def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
              readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
-             site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True) -> Calibration:
-    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings;
-    the keypoint sites are estimated (step 4b) along the directions known within site_std (m;
-    0: the layout's sites kept) when there are IMUs to pin the bones' orientations."""
+             site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True, start: int = 0) -> Calibration:
+    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings,
+    over the `seconds` from frame `start` on; the keypoint sites are estimated (step 4b) along
+    the directions known within site_std (m; 0: the layout's sites kept) when there are IMUs to
+    pin the bones' orientations."""
+    if start:
+        tail = None if readings is None else dataclasses.replace(
+            readings, quaternions=readings.quaternions[start:],
+            accelerations=None if readings.accelerations is None else readings.accelerations[start:])
+        c = estimate(rig, detections[start:], times[start:], layout_name, tail, seconds, step, site_std, use_held_pose)
+        c.window_frames = c.window_frames + start
+        c.report["window_start_s"] = float(times[start] - times[0])
+        return c
     estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0
     window = int(np.searchsorted(times, times[0] + seconds))
     window = max(window, 1)
@@ -279,7 +288,7 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
     report = {
-        "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
+        "window_start_s": 0.0, "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
         "iterations": result.iterations, "converged": result.converged,
         "cost": {"start": result.initial_cost, "end": result.final_cost},
         "scales_start": start.scales,  # step 1, of the default skeleton's groups

@@ -55,12 +55,15 @@ def _people(keypoints: list, n_cameras: int, n_keypoints: int) -> list:
 
 def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
              imu_errors: imu.ImuErrors = imu.ImuErrors(),
-             calibration_pose: str | None = None) -> tuple[TakeFolder, Truth]:
+             calibration_pose: str | None = None, still_s: float = 0.0) -> tuple[TakeFolder, Truth]:
     """The take (IMU quaternions in each sensor's earth frame) and its truth; with a
     calibration pose ("T" or "N", window.calibration_poses), the performer holds it for 1 s
-    and blends into the motion over 0.5 s first."""
+    and blends into the motion over 0.5 s first; with still_s, stands still first for that
+    long (in a pose of the motion, 3 s in) and blends into it over 0.5 s."""
     rng = np.random.default_rng(seed)
     skeleton, thetas, dt = demo_motion.load_motion(FRAME_RATE, seconds)
+    if still_s > 0:
+        thetas = demo_motion.after_held_pose(thetas, thetas[min(len(thetas) - 1, round(3.0 / dt))], dt, still_s)
     if calibration_pose:
         thetas = demo_motion.after_held_pose(thetas, window.calibration_poses(skeleton)[calibration_pose], dt)
     config = sim_take.Config(preset=preset, imu=imu_errors)
@@ -99,9 +102,9 @@ def write_truth(folder: Path, truth: Truth) -> None:
 
 
 def run(folder: Path, seconds: float, preset: str = "hq13", seed: int = 0,
-        calibration_pose: str | None = None) -> dict:
+        calibration_pose: str | None = None, still_s: float = 0.0) -> dict:
     """`mocap simulate --take-out`: simulates, writes the take folder and its truth."""
-    take, truth = simulate(seconds, preset, seed, calibration_pose=calibration_pose)
+    take, truth = simulate(seconds, preset, seed, calibration_pose=calibration_pose, still_s=still_s)
     write_take(folder, take)
     write_truth(Path(folder), truth)
     return {"take": str(folder), "frames": take.n_frames, "cameras": len(take.rig.cameras),
