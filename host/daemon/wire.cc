@@ -3,6 +3,7 @@
 #include <cmath>
 #include <initializer_list>
 
+#include "mocap/v1/calibration.pb.h"
 #include "mocap/v1/health.pb.h"
 #include "mocap/v1/imu_batch.pb.h"
 #include "mocap/v1/keypoint_frame.pb.h"
@@ -57,6 +58,14 @@ DropReason Check(const v1::PoseFrame& m, std::string* detail) {
 
 DropReason Check(const v1::Health&, std::string*) { return DropReason::kNone; }
 
+DropReason Check(const v1::Calibration& m, std::string* detail) {
+  if (m.skeleton_json().empty() || m.imus_json().empty() || m.layout_json().empty()) {
+    *detail = "Calibration from '" + m.source() + "' without its skeleton, IMU sites or layout";
+    return DropReason::kInvalid;
+  }
+  return DropReason::kNone;
+}
+
 template <typename M>
 Decoded Parse(std::string_view payload) {
   Decoded out;
@@ -108,6 +117,7 @@ Decoded DecodeMessage(std::string_view type, std::string_view payload) {
   if (type == "mocap.v1.ImuBatch") return Parse<v1::ImuBatch>(payload);
   if (type == "mocap.v1.PoseFrame") return Parse<v1::PoseFrame>(payload);
   if (type == "mocap.v1.Health") return Parse<v1::Health>(payload);
+  if (type == "mocap.v1.Calibration") return Parse<v1::Calibration>(payload);
   const std::string_view package =
       type.substr(0, type.rfind('.') == std::string_view::npos ? 0 : type.rfind('.'));
   const bool other_version = package.substr(0, 6) == "mocap." && package != kVersion;

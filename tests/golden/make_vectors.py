@@ -122,6 +122,12 @@ def health(m: dict) -> bytes:
             + vint(6, int(m.get("framesSolved", 0))) + vint(7, int(m.get("framesDropped", 0))))
 
 
+def calibration(m: dict) -> bytes:
+    return (text(1, m.get("source", "")) + vint(2, int(m.get("sequence", 0))) + vint(3, int(m.get("validFromNs", 0)))
+            + b"".join(text(4 + i, m.get(c, "")) for i, c in enumerate(["skeletonJson", "imusJson", "layoutJson",
+                                                                        "reportJson"])))
+
+
 KEYPOINT_FRAME = {
     "cameraId": "cam3", "frameIndex": "1152921504606846977", "captureTimeNs": "1763900000123456789",
     "imageWidth": 1920, "imageHeight": 1080, "keypointLayout": "coco17", "detected": True,
@@ -160,8 +166,15 @@ VECTORS = {
                      "malformed": "1", "latencyP50Ms": 0.75, "latencyP99Ms": 2.5},
                     {"stream": "imu/pelvis", "rateHz": 0.0, "received": "100", "lost": "4"}],
         "latencyP50Ms": 1.25, "latencyP99Ms": 3.5, "framesSolved": "3600", "framesDropped": "1"}, None),
+    "calibration": ("mocap.v1.Calibration", {
+        "source": "calibrator", "sequence": "2", "validFromNs": "1763900012000000000",
+        "skeletonJson": '{"format": "mocap.skeleton/1", "bones": []}',
+        "imusJson": '{"format": "mocap.imus/1", "imus": []}',
+        "layoutJson": '{"format": "mocap.layout/1", "name": "coco17", "keypoints": []}',
+        "reportJson": '{"window_start_s": 3.0, "note": "\u00e9t\u00e9"}'}, None),
 }
-ENCODERS = {"mocap.v1.ImuBatch": imu_batch, "mocap.v1.PoseFrame": pose_frame, "mocap.v1.Health": health}
+ENCODERS = {"mocap.v1.ImuBatch": imu_batch, "mocap.v1.PoseFrame": pose_frame, "mocap.v1.Health": health,
+            "mocap.v1.Calibration": calibration}
 # Bytes no reader may accept: (type, bytes).
 REJECTED = {
     "keypoint_frame_truncated": ("mocap.v1.KeypointFrame", keypoint_frame(KEYPOINT_FRAME)[:-7]),

@@ -72,6 +72,8 @@ def topic_and_time(message) -> tuple[str, int]:
             return "/pose", message.capture_time_ns
         case wire.Health():
             return f"/health/{message.source}", message.time_ns
+        case wire.Calibration():
+            return f"/calibration/{message.source}", message.valid_from_ns
     raise TypeError(f"no topic for {type(message).__name__}")
 
 

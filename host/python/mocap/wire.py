@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import math
 
-from mocap.v1 import (health_pb2, imu_batch_pb2, imu_sample_pb2, keypoint_frame_pb2, keypoint_person_pb2,
-                      pose_frame_pb2)
+from mocap.v1 import (calibration_pb2, health_pb2, imu_batch_pb2, imu_sample_pb2, keypoint_frame_pb2,
+                      keypoint_person_pb2, pose_frame_pb2)
 
 VERSION = "mocap.v1"
 MAX_PAYLOAD = 1 << 20  # bytes: a frame of 10 people x 133 keypoints is ~20 kB
@@ -23,7 +23,8 @@ ImuBatch = imu_batch_pb2.ImuBatch
 ImuSample = imu_sample_pb2.ImuSample
 PoseFrame = pose_frame_pb2.PoseFrame
 Health = health_pb2.Health
-TYPES = {cls.DESCRIPTOR.full_name: cls for cls in (KeypointFrame, ImuBatch, PoseFrame, Health)}
+Calibration = calibration_pb2.Calibration
+TYPES = {cls.DESCRIPTOR.full_name: cls for cls in (KeypointFrame, ImuBatch, PoseFrame, Health, Calibration)}
 
 
 class WireError(ValueError):
@@ -77,3 +78,6 @@ def _check(message) -> None:
             _finite([s.qw, s.qx, s.qy, s.qz, s.ax, s.ay, s.az], f"{message.hub_id}/{s.sensor_id}")
     elif isinstance(message, PoseFrame):
         _finite(message.theta, "PoseFrame theta")
+    elif isinstance(message, Calibration):
+        if not (message.skeleton_json and message.imus_json and message.layout_json):
+            raise WireError("invalid", f"Calibration from {message.source!r} without its skeleton, IMU sites or layout")
