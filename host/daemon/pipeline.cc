@@ -45,6 +45,7 @@ HostPipeline::HostPipeline(Session session, std::unique_ptr<Solver> solver)
       solver_(std::move(solver)),
       sync_(static_cast<int>(session_.rig.cameras.size()), static_cast<int>(session_.imus.size()),
             session_.sync),
+      imu_calibrated_(session_.imus.size(), session_.imus_calibrated),
       camera_stats_(session_.rig.cameras.size()),
       imu_stats_(session_.imus.size()) {
   for (size_t c = 0; c < session_.rig.cameras.size(); ++c)
@@ -89,6 +90,12 @@ bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t
     return FeedKeypoints(*frame, now_ns, why);
   if (auto* batch = dynamic_cast<const v1::ImuBatch*>(d.message.get()))
     return FeedImus(*batch, now_ns, why);
+  if (auto* calibration = dynamic_cast<const v1::Calibration*>(d.message.get())) {
+    calibration_stats_.received_in_period++;
+    calibration_stats_.latency_ms.push_back(
+        1e-6 * static_cast<double>(now_ns - calibration->valid_from_ns()));
+    return FeedCalibration(*calibration, why);
+  }
   return Drop("not_an_input", wire::TypeName(*d.message) + " is not an input of the host", why);
 }
 
@@ -157,6 +164,62 @@ bool HostPipeline::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::stri
   return true;
 }
 
+bool HostPipeline::FeedCalibration(const v1::Calibration& c, std::string* why) {
+  const auto reject = [&](const std::string& detail) {
+    calibrations_rejected_++;
+    return Drop("invalid_calibration", "from '" + c.source() + "': " + detail, why);
+  };
+  PendingCalibration p;
+  p.valid_from_ns = c.valid_from_ns();
+  std::string error;
+  if (!ParseSkeletonJson(c.skeleton_json(), &p.skeleton, &error)) return reject(error);
+  const Skeleton& ours = session_.skeleton;
+  if (p.skeleton.num_bones() != ours.num_bones()) return reject("other bones than the session's");
+  for (int b = 0; b < ours.num_bones(); ++b) {
+    if (p.skeleton.bone(b).name != ours.bone(b).name ||
+        p.skeleton.bone(b).parent != ours.bone(b).parent)
+      return reject("other bones than the session's (bone '" + p.skeleton.bone(b).name + "')");
+  }
+  KeypointLayout layout;
+  if (!ParseKeypointLayoutJson(c.layout_json(), p.skeleton, &layout, &error)) return reject(error);
+  if (layout.name != session_.layout.name || layout.names != session_.layout.names)
+    return reject("layout '" + layout.name + "' is not the session's " + session_.layout.name);
+  p.layout = layout.ScaledTo(p.skeleton);
+  std::vector<ImuSite> sites;
+  if (!ParseImuSitesJson(c.imus_json(), p.skeleton, &sites, &error)) return reject(error);
+  p.imus = solver_->imus();  // sensors the calibration leaves out keep their place, unused
+  p.calibrated.assign(p.imus.size(), false);
+  for (ImuSite& site : sites) {
+    const auto it = imu_index_.find(site.name);
+    if (it == imu_index_.end()) return reject("sensor '" + site.name + "' is not in the IMU set");
+    p.calibrated[it->second] = true;
+    p.imus[it->second] = std::move(site);
+  }
+  const auto at =
+      std::upper_bound(pending_.begin(), pending_.end(), p.valid_from_ns,
+                       [](int64_t t, const PendingCalibration& q) { return t < q.valid_from_ns; });
+  pending_.insert(at, std::move(p));
+  return true;
+}
+
+void HostPipeline::ApplyCalibrations(int64_t time_ns) {
+  while (!pending_.empty() && pending_.front().valid_from_ns <= time_ns) {
+    PendingCalibration& p = pending_.front();
+    std::string error;
+    if (solver_->SetCalibration(p.skeleton, p.layout, p.imus, &error)) {
+      session_.skeleton = std::move(p.skeleton);
+      session_.layout = std::move(p.layout);
+      session_.imus = std::move(p.imus);
+      imu_calibrated_ = std::move(p.calibrated);
+      calibrations_applied_++;
+    } else {
+      calibrations_rejected_++;
+      dropped_["invalid_calibration"]++;
+    }
+    pending_.erase(pending_.begin());
+  }
+}
+
 int HostPipeline::ChooseSubject(const v1::KeypointFrame& frame, int camera) const {
   const double min_conf = session_.solver.min_confidence;
   std::vector<Eigen::Vector2d> predicted;
@@ -195,6 +258,12 @@ int HostPipeline::ChooseSubject(const v1::KeypointFrame& frame, int camera) cons
 std::vector<SolvedFrame> HostPipeline::Solve(int64_t now_ns) {
   std::vector<SolvedFrame> out;
   for (SyncedFrame& f : sync_.TakeReady(now_ns)) {
+    ApplyCalibrations(f.time_ns);
+    std::vector<ImuObservation>& imus =
+        f.observations.imus;  // only calibrated IMUs are solved with
+    imus.erase(std::remove_if(imus.begin(), imus.end(),
+                              [&](const ImuObservation& i) { return !imu_calibrated_[i.imu]; }),
+               imus.end());
     const SolveResult r = solver_->Solve(f.observations);
     SolvedFrame s;
     s.last_input_ns = f.last_input_ns;
@@ -270,6 +339,14 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   }
   for (auto& [hub, stats] : hub_stats_)
     add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);
+  // Calibrations: received in the period (rate), applied since start (received), rejected
+  // (malformed); active while any IMU is solved with; latency = arrival - valid_from.
+  calibration_stats_.invalid = calibrations_rejected_;
+  StreamCounts applied;
+  applied.received = calibrations_applied_;
+  add("calibration",
+      std::find(imu_calibrated_.begin(), imu_calibrated_.end(), true) != imu_calibrated_.end(),
+      calibration_stats_, &applied);
   uint64_t malformed = 0;
   for (const auto& [reason, n] : dropped_) malformed += reason == "late_or_duplicate" ? 0 : n;
   StreamStats input;

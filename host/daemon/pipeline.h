@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "mocap/stream_sync.h"
+#include "mocap/v1/calibration.pb.h"
 #include "mocap/v1/health.pb.h"
 #include "mocap/v1/imu_batch.pb.h"
 #include "mocap/v1/keypoint_frame.pb.h"
@@ -46,7 +47,11 @@ class HostPipeline {
   // Health over the period since the previous call (which it starts anew).
   v1::Health Health(int64_t now_ns);
 
+  // The session as in use: its skeleton, layout and IMU sites are the latest calibration's.
   const Session& session() const { return session_; }
+  uint64_t calibrations_applied() const { return calibrations_applied_; }
+  // Per IMU of the session: solved with (its mounting and heading known).
+  const std::vector<bool>& imus_calibrated() const { return imu_calibrated_; }
   const std::map<std::string, uint64_t>& dropped() const { return dropped_; }  // by reason
   uint64_t frames_solved() const { return frames_solved_; }
 
@@ -61,6 +66,10 @@ class HostPipeline {
   bool Drop(const std::string& reason, const std::string& detail, std::string* why);
   bool FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, std::string* why);
   bool FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why);
+  // A calibration to apply from its valid_from_ns on (pending_), when it fits the session.
+  bool FeedCalibration(const v1::Calibration& calibration, std::string* why);
+  // Applies the pending calibrations valid at or before time_ns.
+  void ApplyCalibrations(int64_t time_ns);
   // The subject among the frame's persons: nearest to the current pose's projection once
   // tracking, else the most confident.
   int ChooseSubject(const v1::KeypointFrame& frame, int camera) const;
@@ -70,8 +79,20 @@ class HostPipeline {
   void Count(StreamStats* stats, uint64_t counter, uint64_t modulo, int64_t time_ns,
              int64_t now_ns);
 
+  struct PendingCalibration {
+    int64_t valid_from_ns;
+    Skeleton skeleton;
+    KeypointLayout layout;
+    std::vector<ImuSite> imus;  // the session's IMU set, in its order
+    std::vector<bool> calibrated;
+  };
+
   Session session_;
   std::unique_ptr<Solver> solver_;
+  std::vector<bool> imu_calibrated_;
+  std::vector<PendingCalibration> pending_;  // by valid_from_ns
+  uint64_t calibrations_applied_ = 0, calibrations_rejected_ = 0;
+  StreamStats calibration_stats_;
   StreamSynchroniser sync_;
   std::unordered_map<std::string, int> camera_index_, imu_index_;
   std::vector<StreamStats> camera_stats_, imu_stats_;

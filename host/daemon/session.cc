@@ -82,6 +82,7 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
       throw std::runtime_error(*error);
     if (j.contains("solver") && !ReadSolver(j.at("solver"), &s.solver, error))
       throw std::runtime_error(*error);
+    s.imus_calibrated = j.value("imus_calibrated", true);
     *out = std::move(s);
     return true;
   } catch (const std::exception& e) {

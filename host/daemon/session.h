@@ -7,9 +7,13 @@
 //             "imu_max_gap_ms": 40, "imu_max_hold_ms": 15, "imu_only_rate_hz": 60},
 //    "solver": {"function_tolerance": 1e-3, "max_iterations": 10, "predict_motion": true,
 //               "velocity_gain": 0.3, "max_keypoint_cost": 2.5, "heading_time_constant": 1,
-//               "heading_baseline_s": 0}}
-// Paths are relative to the session file. Camera ids on the wire are the rig's camera
-// names, sensor ids the IMU set's names. Missing "sync" / "solver" keys keep the defaults.
+//               "heading_baseline_s": 0},
+//    "imus_calibrated": true}
+// Paths are relative to the session file. "imus_calibrated": false (default true) says the IMU
+// set's mountings and headings are not known yet: the IMUs are synchronised but not solved
+// with until a Calibration message (proto/mocap/v1/calibration.proto) brings them. Camera ids on
+// the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
+// keys keep the defaults.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -32,6 +36,7 @@ struct Session {
   SyncOptions sync;
   std::vector<std::string> inputs;
   std::string output;
+  bool imus_calibrated = true;
 };
 
 bool LoadSession(const std::string& path, Session* out, std::string* error);

@@ -239,6 +239,10 @@ PYBIND11_MODULE(_core, m) {
       return LoadImuSitesJson(path, s, out, e);
     });
   });
+  m.def("imu_sites_to_json", &ImuSitesToJson, py::arg("skeleton"), py::arg("imus"),
+        "The IMU set file (mocap.imus/1) of IMU sites.");
+  m.def("layout_to_json", &KeypointLayoutToJson, py::arg("skeleton"), py::arg("layout"),
+        "The layout file (mocap.layout/1), its offsets as they are for the skeleton.");
 
   py::class_<Camera>(m, "Camera")
       .def(py::init<>())

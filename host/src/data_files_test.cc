@@ -68,6 +68,36 @@ TEST(DataFiles, ImuSetsAreThePapersSets) {
   EXPECT_EQ(imus.size(), 6u);
 }
 
+// What a calibrator writes (and publishes in a Calibration message) reads back the same.
+TEST(DataFiles, LayoutsAndImuSitesRoundTrip) {
+  const testing::Scene scene = testing::MakeScene(2);
+  std::vector<Skeleton::Bone> bones = scene.skeleton.bones();
+  for (auto& b : bones) b.offset *= 1.1;
+  Skeleton tall;
+  std::string error;
+  ASSERT_TRUE(Skeleton::Create(bones, &tall, &error)) << error;
+  KeypointLayout layout = scene.layout.ScaledTo(tall), again;
+  layout.sites[4].offset += Eigen::Vector3d(0.01, -0.02, 0.005);
+  ASSERT_TRUE(ParseKeypointLayoutJson(KeypointLayoutToJson(tall, layout), tall, &again, &error))
+      << error;
+  again = again.ScaledTo(tall);  // as the host loads it: no change for this skeleton
+  ASSERT_EQ(again.names, layout.names);
+  for (int k = 0; k < layout.size(); ++k) {
+    EXPECT_EQ(again.sites[k].bone, layout.sites[k].bone);
+    EXPECT_LT((again.sites[k].offset - layout.sites[k].offset).norm(), 1e-12) << k;
+  }
+  std::vector<ImuSite> imus;
+  ASSERT_TRUE(ParseImuSitesJson(ImuSitesToJson(tall, scene.imus), tall, &imus, &error)) << error;
+  ASSERT_EQ(imus.size(), scene.imus.size());
+  for (size_t i = 0; i < imus.size(); ++i) {
+    EXPECT_EQ(imus[i].name, scene.imus[i].name);
+    EXPECT_EQ(imus[i].bone, scene.imus[i].bone);
+    EXPECT_LT((imus[i].mount - scene.imus[i].mount).norm(), 1e-12);
+    EXPECT_LT((imus[i].reference - scene.imus[i].reference).norm(), 1e-12);
+    EXPECT_LT((imus[i].offset - scene.imus[i].offset).norm(), 1e-12);
+  }
+}
+
 TEST(DataFiles, MalformedFilesAreRefusedWithAReason) {
   Skeleton s;
   std::string error;

@@ -106,4 +106,38 @@ bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton, std::ve
   });
 }
 
+namespace {
+
+nlohmann::json Vector(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+std::string KeypointLayoutToJson(const Skeleton& skeleton, const KeypointLayout& layout) {
+  nlohmann::json j;
+  j["format"] = "mocap.layout/1";
+  j["name"] = layout.name;
+  j["reference_height"] = skeleton.RestHeight();
+  j["keypoints"] = nlohmann::json::array();
+  for (int k = 0; k < layout.size(); ++k) {
+    j["keypoints"].push_back({{"name", layout.names[k]},
+                              {"bone", skeleton.bone(layout.sites[k].bone).name},
+                              {"offset", Vector(layout.sites[k].offset)}});
+  }
+  return j.dump(1);
+}
+
+std::string ImuSitesToJson(const Skeleton& skeleton, const std::vector<ImuSite>& imus) {
+  nlohmann::json j;
+  j["format"] = "mocap.imus/1";
+  j["imus"] = nlohmann::json::array();
+  for (const ImuSite& s : imus) {
+    j["imus"].push_back({{"name", s.name},
+                         {"bone", skeleton.bone(s.bone).name},
+                         {"mount", Vector(Log(s.mount))},
+                         {"offset", Vector(s.offset)},
+                         {"reference", Vector(Log(s.reference))}});
+  }
+  return j.dump(1);
+}
+
 }  // namespace mocap

@@ -86,28 +86,33 @@ bool SolverOptions::IsValid(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// The layout's and the IMU sites' bones are the skeleton's.
+bool CheckSites(const Skeleton& skeleton, const KeypointLayout& layout,
+                const std::vector<ImuSite>& imus, std::string* error) {
+  if (skeleton.num_bones() == 0) return *error = "empty skeleton", false;
+  for (const Site& s : layout.sites) {
+    if (s.bone < 0 || s.bone >= skeleton.num_bones() || !s.offset.allFinite())
+      return *error = "layout '" + layout.name + "' has a site on an unknown bone", false;
+  }
+  for (const ImuSite& s : imus) {
+    if (s.bone < 0 || s.bone >= skeleton.num_bones() || !s.offset.allFinite() ||
+        !s.mount.allFinite() || !s.reference.allFinite())
+      return *error = "IMU '" + s.name + "' is on an unknown bone or not finite", false;
+  }
+  return true;
+}
+
+}  // namespace
+
 std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayout layout,
                                        std::vector<ImuSite> imus, std::optional<PosePrior> prior,
                                        SolverOptions options, std::string* error) {
-  if (skeleton.num_bones() == 0) {
-    *error = "empty skeleton";
-    return nullptr;
-  }
   for (const Camera& c : rig.cameras) {
     if (!c.IsValid(error)) return nullptr;
   }
-  for (const Site& s : layout.sites) {
-    if (s.bone < 0 || s.bone >= skeleton.num_bones() || !s.offset.allFinite()) {
-      *error = "layout '" + layout.name + "' has a site on an unknown bone";
-      return nullptr;
-    }
-  }
-  for (const ImuSite& s : imus) {
-    if (s.bone < 0 || s.bone >= skeleton.num_bones()) {
-      *error = "IMU '" + s.name + "' is on an unknown bone";
-      return nullptr;
-    }
-  }
+  if (!CheckSites(skeleton, layout, imus, error)) return nullptr;
   if (prior) {
     if (!prior->IsValid(error)) return nullptr;
     if (prior->dof() != skeleton.pose_dim() - 6) {
@@ -161,6 +166,32 @@ bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
   ceres::Solver::Summary summary;
   problem.Solve(CeresOptions(fit, max_iterations), &summary);
   return summary.IsSolutionUsable() && theta->allFinite();
+}
+
+bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vector<ImuSite> imus,
+                            std::string* error) {
+  if (skeleton.num_bones() != skeleton_.num_bones())
+    return *error = "the calibration's skeleton has other bones than the solver's", false;
+  for (int b = 0; b < skeleton.num_bones(); ++b) {
+    if (skeleton.bone(b).name != skeleton_.bone(b).name ||
+        skeleton.bone(b).parent != skeleton_.bone(b).parent)
+      return *error = "the calibration's skeleton has other bones than the solver's (bone '" +
+                      skeleton.bone(b).name + "')",
+             false;
+  }
+  if (layout.size() != layout_.size())
+    return *error = "the calibration's layout has " + std::to_string(layout.size()) +
+                    " keypoints, the solver's " + std::to_string(layout_.size()),
+           false;
+  if (!CheckSites(skeleton, layout, imus, error)) return false;
+  skeleton_ = std::move(skeleton);
+  layout_ = std::move(layout);
+  imus_ = std::move(imus);
+  headings_.assign(imus_.size(), 0.0);
+  heading_baselines_.assign(imus_.size(), {});
+  last_heading_update_.reset();
+  motion_.reset();  // the sites moved: E_A starts again from the next two solves
+  return true;
 }
 
 bool Solver::SetOptions(const SolverOptions& options, std::string* error) {

@@ -51,6 +51,9 @@ bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton, K
                             std::string* error);
 bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, KeypointLayout* out,
                              std::string* error);
+// The layout with its offsets as they are for `skeleton` (reference_height = its rest
+// height: loading it for that skeleton and scaling to it changes nothing).
+std::string KeypointLayoutToJson(const Skeleton& skeleton, const KeypointLayout& layout);
 
 // IMU set file: {"format": "mocap.imus/1", "imus": [{"name": ..., "bone": ...,
 //   "mount": [rotation vector], "offset": [x, y, z], "reference": [rotation vector]}]}
@@ -59,6 +62,7 @@ bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton, std::ve
                       std::string* error);
 bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::vector<ImuSite>* out,
                        std::string* error);
+std::string ImuSitesToJson(const Skeleton& skeleton, const std::vector<ImuSite>& imus);
 
 }  // namespace mocap
 

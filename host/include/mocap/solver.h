@@ -121,6 +121,13 @@ class Solver {
   // use is Rz(psi_i) * imus()[i].reference.
   const std::vector<double>& headings() const { return headings_; }
   const SolverOptions& options() const { return options_; }
+  // Replaces the calibration (a skeleton with the same bones, names and parents; a layout
+  // with as many keypoints; any IMU sites on its bones) from the next frame on, the pose and
+  // its history kept: a calibration refined during capture. The heading corrections start
+  // again from zero (the references are new) and E_A from the next two solves. False with
+  // *error, nothing changed, when it does not fit.
+  bool SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vector<ImuSite> imus,
+                      std::string* error);
   // Replaces the options (weights, losses, tolerances) from the next frame on; false and
   // *error set, options unchanged, when they are out of range.
   bool SetOptions(const SolverOptions& options, std::string* error);

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-import numpy as np
+import json
 
-from mocap import _core, prior, rotations
+
+from mocap import _core, prior
 from mocap.errors import InputError
 
 _DEFAULT = object()
@@ -21,20 +22,13 @@ class Solver(_core.Solver):
 
 def imu_set_json(skeleton: _core.Skeleton, imus) -> dict:
     """IMU sites in the solver's IMU set format (mocap.imus/1, sites.h)."""
-    names = skeleton.bone_names
-    return {"format": "mocap.imus/1", "imus": [
-        {"name": s.name, "bone": names[s.bone], "mount": rotations.log(np.asarray(s.mount)).tolist(),
-         "offset": np.asarray(s.offset).tolist(), "reference": rotations.log(np.asarray(s.reference)).tolist()}
-        for s in imus]}
+    return json.loads(_core.imu_sites_to_json(skeleton, list(imus)))
 
 
 def layout_json(skeleton: _core.Skeleton, layout: _core.KeypointLayout) -> dict:
     """A keypoint layout in the layout file format (mocap.layout/1, sites.h), its offsets as
     they are for `skeleton` (reference_height = its rest height: loading scales by 1)."""
-    names = skeleton.bone_names
-    return {"format": "mocap.layout/1", "name": layout.name, "reference_height": skeleton.rest_height(),
-            "keypoints": [{"name": n, "bone": names[b], "offset": np.asarray(o).tolist()}
-                          for n, b, o in zip(layout.names, layout.bones, layout.offsets)]}
+    return json.loads(_core.layout_to_json(skeleton, layout))
 
 
 def solver_options(settings: list[str]) -> _core.SolverOptions:

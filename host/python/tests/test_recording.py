@@ -13,7 +13,8 @@ TIMEOUT_S = 30.0  # bound on waits for the network; generous for loaded machines
 
 
 def stream_messages() -> list:
-    """Keypoints of two cameras, IMU batches, a pose and a health report, in capture order."""
+    """Keypoints of two cameras, IMU batches, a pose, a health report and a calibration, in
+    capture order."""
     person = wire.KeypointPerson(x=[10.5, 20.25], y=[30.0, 40.0], confidence=[0.9, 0.0], track_id=3)
     cameras = [wire.KeypointFrame(camera_id=f"cam{i % 2}", frame_index=i // 2, capture_time_ns=1_000 + i,
                                   detected=i % 3 != 2, persons=[person] if i % 3 == 0 else [], keypoint_layout="coco17")
@@ -22,7 +23,9 @@ def stream_messages() -> list:
     imus = [wire.ImuBatch(hub_id="hub0", sequence=i, send_time_ns=2_000 + i, samples=[sample]) for i in range(3)]
     pose = wire.PoseFrame(capture_time_ns=1_000, frame_index=7, theta=[0.1] * 66, cameras=["cam0", "cam1"])
     health = wire.Health(source="host", time_ns=3_000, latency_p50_ms=4.5)
-    return cameras[:3] + imus[:2] + [pose] + cameras[3:] + [imus[2], health]
+    calibration = wire.Calibration(source="calibrator", valid_from_ns=4_000, skeleton_json="{}", imus_json="{}",
+                                   layout_json="{}")
+    return cameras[:3] + imus[:2] + [pose] + cameras[3:] + [imus[2], health, calibration]
 
 
 def malformed_frames() -> dict[str, list[bytes]]:
@@ -64,7 +67,8 @@ def test_read_gives_back_the_well_formed_messages_in_log_time_order(recorded):
     got = list(recording.read(path))
     assert [(m.log_time_ns, m.topic, m.type_name, m.payload) for m in got] == [
         (t, topic(m), m.DESCRIPTOR.full_name, m.SerializeToString()) for t, m in zip(log_times, messages)]
-    assert {m.topic for m in got} == {"/camera/cam0", "/camera/cam1", "/imu/hub0", "/pose", "/health/host"}
+    assert {m.topic for m in got} == {"/camera/cam0", "/camera/cam1", "/imu/hub0", "/pose", "/health/host",
+                                      "/calibration/calibrator"}
     writes_with_malformed = len(range(0, len(messages), 3))
     assert recorder.dropped == {reason: writes_with_malformed for reason in malformed_frames()}
     assert sum(recorder.recorded.values()) == len(messages) and recorder.recorded["/camera/cam1"] == 3
