@@ -169,6 +169,11 @@ bool HostPipeline::FeedCalibration(const v1::Calibration& c, std::string* why) {
     calibrations_rejected_++;
     return Drop("invalid_calibration", "from '" + c.source() + "': " + detail, why);
   };
+  const auto seen = calibration_sequences_.find(c.source());
+  if (seen != calibration_sequences_.end() && c.sequence() <= seen->second) {
+    calibrations_repeated_++;
+    return true;  // taken already
+  }
   PendingCalibration p;
   p.valid_from_ns = c.valid_from_ns();
   std::string error;
@@ -199,6 +204,7 @@ bool HostPipeline::FeedCalibration(const v1::Calibration& c, std::string* why) {
       std::upper_bound(pending_.begin(), pending_.end(), p.valid_from_ns,
                        [](int64_t t, const PendingCalibration& q) { return t < q.valid_from_ns; });
   pending_.insert(at, std::move(p));
+  calibration_sequences_[c.source()] = c.sequence();
   return true;
 }
 
@@ -339,11 +345,13 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   }
   for (auto& [hub, stats] : hub_stats_)
     add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);
-  // Calibrations: received in the period (rate), applied since start (received), rejected
-  // (malformed); active while any IMU is solved with; latency = arrival - valid_from.
+  // Calibrations: received in the period (rate), applied since start (received), repeats of
+  // one taken (duplicates), rejected (malformed); active while any IMU is solved with;
+  // latency = arrival - valid_from.
   calibration_stats_.invalid = calibrations_rejected_;
   StreamCounts applied;
   applied.received = calibrations_applied_;
+  applied.duplicates = calibrations_repeated_;
   add("calibration",
       std::find(imu_calibrated_.begin(), imu_calibrated_.end(), true) != imu_calibrated_.end(),
       calibration_stats_, &applied);

@@ -66,7 +66,8 @@ class HostPipeline {
   bool Drop(const std::string& reason, const std::string& detail, std::string* why);
   bool FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, std::string* why);
   bool FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why);
-  // A calibration to apply from its valid_from_ns on (pending_), when it fits the session.
+  // A calibration to apply from its valid_from_ns on (pending_), when it fits the session;
+  // one its source sent before (a calibrator repeats its latest for late joiners) is skipped.
   bool FeedCalibration(const v1::Calibration& calibration, std::string* why);
   // Applies the pending calibrations valid at or before time_ns.
   void ApplyCalibrations(int64_t time_ns);
@@ -91,7 +92,8 @@ class HostPipeline {
   std::unique_ptr<Solver> solver_;
   std::vector<bool> imu_calibrated_;
   std::vector<PendingCalibration> pending_;  // by valid_from_ns
-  uint64_t calibrations_applied_ = 0, calibrations_rejected_ = 0;
+  uint64_t calibrations_applied_ = 0, calibrations_rejected_ = 0, calibrations_repeated_ = 0;
+  std::map<std::string, uint64_t> calibration_sequences_;  // by source: the newest taken
   StreamStats calibration_stats_;
   StreamSynchroniser sync_;
   std::unordered_map<std::string, int> camera_index_, imu_index_;

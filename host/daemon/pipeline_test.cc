@@ -223,9 +223,14 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
       EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration",
                                  CalibrationOf(studio.scene, kT0 + 20 * kFrame).SerializeAsString(),
                                  now));
-      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration",
-                                 CalibrationOf(partial, kT0 + 40 * kFrame).SerializeAsString(),
-                                 now));
+      v1::Calibration second = CalibrationOf(partial, kT0 + 40 * kFrame);
+      second.set_sequence(1);
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", second.SerializeAsString(), now));
+    }
+    if (k == 45) {  // the calibrator repeats its latest (for late joiners): taken once only
+      v1::Calibration again = CalibrationOf(partial, kT0 + 40 * kFrame);
+      again.set_sequence(1);
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", again.SerializeAsString(), now));
     }
     pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now);
     for (int c = 0; c < 4; ++c)
@@ -262,6 +267,7 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
                    [](const v1::StreamHealth& s) { return s.stream() == "calibration"; });
   ASSERT_NE(it, health.streams().end());
   EXPECT_EQ(it->received(), 2u);
+  EXPECT_EQ(it->duplicates(), 1u);
   EXPECT_EQ(it->malformed(), 3u);
   EXPECT_TRUE(it->active());
 }
