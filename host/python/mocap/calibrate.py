@@ -20,12 +20,14 @@ calibration.json, and a copy of the session's rig and prior files.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import tempfile
 import threading
 import time
 from collections import defaultdict
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -39,26 +41,26 @@ from mocap.take_solve import LAYOUT_SIZES, choose_subject
 INVALID_ORIENTATION, INVALID_ACCELERATION = 1, 2  # ImuSample.Status bits
 
 
-def _inputs(path: Path, camera_names: list[str]):
+def _inputs(messages: Iterable[tuple[str, bytes]], camera_names: list[str], where: str):
     """Per camera [(capture_time_ns, [(K, 3) per person])], per sensor [(time_ns, q wxyz, a)],
-    the keypoint layout."""
+    the keypoint layout, from (type name, payload) messages."""
     cams, imus, layouts = defaultdict(list), defaultdict(list), set()
-    for m in recording.read(path):
-        if m.type_name == "mocap.v1.KeypointFrame":
-            f = wire.KeypointFrame.FromString(m.payload)
+    for type_name, payload in messages:
+        if type_name == "mocap.v1.KeypointFrame":
+            f = wire.KeypointFrame.FromString(payload)
             if f.camera_id not in camera_names or not f.detected:
                 continue
             layouts.add(f.keypoint_layout)
             people = [np.stack([p.x, p.y, p.confidence], axis=1) for p in f.persons
                       if len(p.x) == len(p.y) == len(p.confidence)]
             cams[f.camera_id].append((f.capture_time_ns, people))
-        elif m.type_name == "mocap.v1.ImuBatch":
-            for s in wire.ImuBatch.FromString(m.payload).samples:
+        elif type_name == "mocap.v1.ImuBatch":
+            for s in wire.ImuBatch.FromString(payload).samples:
                 q = [np.nan] * 4 if s.status & INVALID_ORIENTATION else [s.qw, s.qx, s.qy, s.qz]
                 a = [np.nan] * 3 if s.status & INVALID_ACCELERATION else [s.ax, s.ay, s.az]
                 imus[s.sensor_id].append((s.sample_time_ns, q, a))
     if len(layouts) > 1:
-        raise InputError(f"{path}: the cameras use different keypoint layouts {sorted(layouts)}")
+        raise InputError(f"{where}: the cameras use different keypoint layouts {sorted(layouts)}")
     return cams, imus, layouts.pop() if layouts else None
 
 
@@ -136,6 +138,82 @@ class MotionWatch:
         return float(np.nanmedian(spreads)) if np.isfinite(spreads).any() else float("nan")
 
 
+@dataclasses.dataclass
+class Estimated:
+    """A session's calibration estimated from messages, in the host's file formats (as a
+    Calibration message carries it), and what was done."""
+    skeleton_json: str  # mocap.skeleton/1
+    imus_json: str  # mocap.imus/1
+    layout_json: str  # mocap.layout/1
+    report: dict
+
+
+def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: float, where: str) -> Estimated:
+    """The calibration of `session`'s subject from (type name, payload) messages of its
+    cameras and IMU hubs (a recording, or the live calibrator's last seconds); InputError
+    when they cannot give one (`where` names them)."""
+    config = json.loads(Path(session).read_text())
+    base = Path(session).parent
+    skeleton = _core.Skeleton.load(str(base / config["skeleton"]))
+    rig = _core.Rig.load(str(base / config["rig"]))
+    imu_set = _core.load_imu_sites(str(base / config["imus"]), skeleton)
+    names = [c.name for c in rig.cameras]
+    cams, samples, layout = _inputs(messages, names, where)
+    if not cams or layout is None:
+        raise InputError(f"{where}: no camera frame with detections of the session's cameras")
+    times_ns, det = _frames(cams, names, LAYOUT_SIZES[layout])
+    t0 = times_ns[0]
+    sensors = []
+    for s in imu_set:
+        rows = samples.get(s.name, [])
+        if len(rows) < 2:
+            continue
+        t = np.array([r[0] for r in rows], dtype=np.int64)
+        order = np.argsort(t, kind="stable")
+        t, unique = np.unique(t[order], return_index=True)
+        q = np.array([rows[i][1] for i in order[unique]])
+        a = np.array([rows[i][2] for i in order[unique]])
+        ok = np.isfinite(q).all(axis=1) & np.isfinite(a).all(axis=1)
+        if ok.sum() >= 2:
+            sensors.append((s.name, s.bone, (t[ok] - t0) * 1e-9, q[ok], a[ok]))
+    frame_times = (times_ns - t0) * 1e-9
+    readings = window.readings_at(frame_times, sensors) if sensors else None
+    first, score, why_not = informative.calibration_window(det, frame_times, readings, seconds)
+    if why_not:
+        raise InputError(f"{where}: {why_not.split(';')[0]}: the performer should move (walk, "
+                         f"swing the arms, bend) while the studio calibrates")
+    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, start=first)
+    return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
+                     json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),
+                     {"frames": len(frame_times), "first_frame_time_ns": int(t0),
+                           "window_motion_score_deg": score, "imus_calibrated": [s[0] for s in sensors],
+                           "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
+                           "window": cal.report})
+
+
+def write_session(out: Path, session: Path, estimated: Estimated, report: dict) -> None:
+    """Writes `session` with the estimated calibration into `out` (session.json, skeleton.json,
+    imus.json, layout.json, calibration.json = report, copies of the rig and the prior)."""
+    config = json.loads(Path(session).read_text())
+    base = Path(session).parent
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "skeleton.json").write_text(estimated.skeleton_json)
+    (out / "imus.json").write_text(estimated.imus_json)
+    (out / "layout.json").write_text(estimated.layout_json)
+    (out / "calibration.json").write_text(json.dumps(report, indent=1))
+    for key in ("rig", "prior"):  # copied: an attached session lives in a temporary folder
+        if config.get(key) and (base / config[key]).resolve() != (out / Path(config[key]).name).resolve():
+            shutil.copyfile(base / config[key], out / Path(config[key]).name)
+        if config.get(key):
+            config[key] = Path(config[key]).name
+    config["skeleton"], config["imus"], config["layout"] = "skeleton.json", "imus.json", "layout.json"
+    config["imus_calibrated"] = True
+    # Headings fitted to this video: tracked against it, without a baseline (solver.h).
+    config["solver"] = {**config.get("solver", {}), "heading_time_constant": window.HEADING_TIME_CONSTANT_S,
+                        "heading_baseline_s": 0.0}
+    (out / "session.json").write_text(json.dumps(config, indent=1))
+
+
 def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS) -> dict:
     recording_path, out = Path(recording_path), Path(out)
     with tempfile.TemporaryDirectory() as attached:
@@ -144,55 +222,8 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
             if session is None:
                 raise InputError(f"{recording_path}: no session is attached; give one with --session")
         session = Path(session).resolve()
-        config = json.loads(session.read_text())
-        base = session.parent
-        skeleton = _core.Skeleton.load(str(base / config["skeleton"]))
-        rig = _core.Rig.load(str(base / config["rig"]))
-        imu_set = _core.load_imu_sites(str(base / config["imus"]), skeleton)
-        names = [c.name for c in rig.cameras]
-        cams, samples, layout = _inputs(recording_path, names)
-        if not cams or layout is None:
-            raise InputError(f"{recording_path}: no camera frame with detections of the session's cameras")
-        times_ns, det = _frames(cams, names, LAYOUT_SIZES[layout])
-        t0 = times_ns[0]
-        sensors = []
-        for s in imu_set:
-            rows = samples.get(s.name, [])
-            if len(rows) < 2:
-                continue
-            t = np.array([r[0] for r in rows], dtype=np.int64)
-            order = np.argsort(t, kind="stable")
-            t, unique = np.unique(t[order], return_index=True)
-            q = np.array([rows[i][1] for i in order[unique]])
-            a = np.array([rows[i][2] for i in order[unique]])
-            ok = np.isfinite(q).all(axis=1) & np.isfinite(a).all(axis=1)
-            if ok.sum() >= 2:
-                sensors.append((s.name, s.bone, (t[ok] - t0) * 1e-9, q[ok], a[ok]))
-        frame_times = (times_ns - t0) * 1e-9
-        readings = window.readings_at(frame_times, sensors) if sensors else None
-        first, score, why_not = informative.calibration_window(det, frame_times, readings, seconds)
-        if why_not:
-            raise InputError(f"{recording_path}: {why_not.split(';')[0]}: the performer should move (walk, "
-                             f"swing the arms, bend) while the studio calibrates")
-        cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, start=first)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "skeleton.json").write_text(cal.skeleton.to_json())
-        (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
-        (out / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
-        report = {"recording": str(recording_path), "session": str(session), "frames": len(frame_times),
-                  "window_motion_score_deg": score,
-                  "imus_calibrated": [s[0] for s in sensors],
-                  "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
-                  "window": cal.report}
-        (out / "calibration.json").write_text(json.dumps(report, indent=1))
-        for key in ("rig", "prior"):  # copied: an attached session lives in a temporary folder
-            if config.get(key):
-                source = base / config[key]
-                shutil.copyfile(source, out / source.name)
-                config[key] = source.name
-        config["skeleton"], config["imus"], config["layout"] = "skeleton.json", "imus.json", "layout.json"
-        # Headings fitted to this video: tracked against it, without a baseline (solver.h).
-        config["solver"] = {**config.get("solver", {}), "heading_time_constant": window.HEADING_TIME_CONSTANT_S,
-                            "heading_baseline_s": 0.0}
-        (out / "session.json").write_text(json.dumps(config, indent=1))
+        estimated = estimate(((m.type_name, m.payload) for m in recording.read(recording_path)), session, seconds,
+                             str(recording_path))
+        report = {"recording": str(recording_path), "session": str(session), **estimated.report}
+        write_session(out, session, estimated, report)
     return report

@@ -87,7 +87,7 @@ def _demo(args: argparse.Namespace) -> int:
     from mocap import demo
 
     result = demo.run(Path(args.out), args.seconds, vmc=args.vmc, seed=args.seed, record=args.record,
-                      calibration=args.calibration)
+                      calibration=args.calibration, still_s=args.still_start)
     return 0 if result["solved"] else 1
 
 
@@ -98,6 +98,16 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     if bool(args.recording) == bool(args.connect):
         raise InputError("give exactly one of --recording FILE and --connect EP...")
+    if args.follow:
+        from mocap import calibrator
+
+        if not (args.connect and args.session and args.publish):
+            raise InputError("--follow needs --connect, --session and --publish")
+        published = calibrator.follow(args.connect, Path(args.session), Path(args.out), args.publish, args.seconds,
+                                      calibrator.Policy(max_wait_s=args.max_seconds), duration_s=args.duration)
+        print(json.dumps({"calibrations": [{k: c[k] for k in ("sequence", "valid_from_ns", "score_deg")}
+                                           for c in published]}), flush=True)
+        return 0
     recorded = Path(args.recording) if args.recording else Path(args.out) / "calibration.mcap"
     if args.connect:
         if not args.session:
@@ -307,8 +317,12 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--vmc", default=None, metavar="HOST:PORT", help="also stream the poses as VMC (OSC/UDP)")
     d.add_argument("--record", default=None, metavar="FILE", help="record every stream to this MCAP file")
     d.add_argument("--seed", type=int, default=0)
-    d.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
-                   help="estimated: the host calibrates from the take's first 5 s (default); oracle: the truth")
+    d.add_argument("--calibration", default="estimated", choices=["estimated", "oracle", "live"],
+                   help="estimated: calibrated from the streams' first 5 s with motion before the take (default); "
+                        "live: mocapd starts from video alone and the live calibrator (mocap calibrate --follow) "
+                        "calibrates, then refines, during the take; oracle: the truth")
+    d.add_argument("--still-start", type=float, default=0.0, metavar="S",
+                   help="the performer stands still for S seconds before moving")
     d.set_defaults(func=_demo)
 
     ca = sub.add_parser("calibrate", help="a live session whose skeleton and IMU mounting, heading and position are "
@@ -322,7 +336,14 @@ def build_parser() -> argparse.ArgumentParser:
     ca.add_argument("--out", required=True, help="folder for the calibrated session (session.json and its files)")
     ca.add_argument("--seconds", type=float, default=5.0, help="length of the calibration window (default 5)")
     ca.add_argument("--max-seconds", type=float, default=30.0,
-                    help="--connect: stop recording after this long even if the IMUs barely moved (default 30)")
+                    help="--connect: stop recording after this long even if the IMUs barely moved (default 30); "
+                         "--follow: calibrate after this long from seconds that move less")
+    ca.add_argument("--follow", action="store_true",
+                    help="with --connect: keep running beside mocapd, publish a Calibration on --publish as soon as "
+                         "the IMUs moved enough and a refined one when they move much more (mocap.calibrator); "
+                         "the latest is also written to --out as a session")
+    ca.add_argument("--publish", metavar="EP", help="--follow: where to publish (one of mocapd's inputs)")
+    ca.add_argument("--duration", type=float, default=None, help="--follow: stop after this many seconds")
     ca.set_defaults(func=_calibrate)
 
     sm = sub.add_parser("simulate", help="simulate a take of the demo motion (cameras + IMUs) and write it as a "

@@ -7,7 +7,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mocap import live
+from mocap import _core, live
 from mocap.export.bvh import write_bvh
 from mocap.export.joints_csv import write_joints_csv
 from mocap.export.vmc import VmcSender
@@ -22,11 +22,21 @@ def _progress(health) -> None:
     print(line, end="" if sys.stderr.isatty() else "\n", file=sys.stderr, flush=True)
 
 
-def calibration_line(studio: live.Studio) -> str:
+def calibration_line(studio: live.Studio, result: dict) -> str:
     if studio.calibration == "oracle":
         return "Calibration: the oracle (the simulation's true skeleton and IMU mounting)."
-    return ("Calibration: estimated by the host from the take's first 5 s (skeleton, IMU mountings, headings and "
-            "positions; `docs/calibration.md`, details in `session/calibration.json`): nothing of the truth.")
+    if studio.calibration == "live":
+        when = result.get("calibrated_from_s")
+        after = result.get("calibrated", {}).get("joint_centres_pos_cm")
+        return ("Calibration: live — mocapd started from video alone with the default skeleton; the live calibrator "
+                "(`mocap calibrate --follow`) published the subject's calibration as soon as the IMUs had moved "
+                "enough, estimated from the live streams (details in `session/calibrated/calibration.json`): "
+                + ("never, in this take." if when is None else
+                   f"solved with the IMUs from {when:.1f} s of the take on"
+                   + ("" if after is None else f", joint centres {after:.2f} cm from then") + "."))
+    return ("Calibration: estimated by the host from the take's first 5 s with motion (skeleton, IMU mountings, "
+            "headings and positions; `docs/calibration.md`, details in `session/calibration.json`): nothing of the "
+            "truth.")
 
 
 def _largest(corrections: dict) -> str:
@@ -46,7 +56,7 @@ def report(result: dict, seconds: float, studio: live.Studio) -> str:
         f"looped to {seconds:.0f} s; {len(studio.camera_ids)} cameras at 60 fps (simulated detector errors), "
         f"13 IMUs at {live.IMU_RATE:.0f} Hz (simulated sensor errors); played in real time by one "
         "process per camera and an IMU hub over ZeroMQ on loopback; solved live by mocapd.", "",
-        calibration_line(studio), "",
+        calibration_line(studio, result), "",
         "| figure | value |", "|---|---|",
         f"| frames captured | {result['frames']} |",
         f"| frames solved and received | {result['solved']} |",
@@ -63,10 +73,10 @@ def report(result: dict, seconds: float, studio: live.Studio) -> str:
 
 
 def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record: str | None = None,
-        calibration: str = "estimated") -> dict:
+        calibration: str = "estimated", still_s: float = 0.0) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     print(f"mocap demo: simulating {seconds:.0f} s of the studio into {out / 'session'}", file=sys.stderr)
-    studio = live.prepare(out / "session", seconds, seed=seed, calibration=calibration)
+    studio = live.prepare(out / "session", seconds, seed=seed, calibration=calibration, still_s=still_s)
     sender = None
     if vmc:
         host, _, port = vmc.partition(":")
@@ -77,6 +87,8 @@ def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record
                      record=Path(record) if record else None)
     print(file=sys.stderr)
     result = live.score(studio, run_)
+    if (studio.calibrated / "skeleton.json").is_file():  # the live calibrator's latest
+        studio.session_skeleton = _core.Skeleton.load(str(studio.calibrated / "skeleton.json"))
     if len(result["thetas"]):
         write_bvh(out / "demo.bvh", studio.session_skeleton, result["thetas"], 60.0)
         write_joints_csv(out / "demo_joints.csv", studio.session_skeleton, result["thetas"], result["times"])

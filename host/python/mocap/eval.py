@@ -79,10 +79,16 @@ def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: 
            solved_skeleton: _core.Skeleton | None = None) -> dict:
     """Errors of solved poses against the truth; solved_skeleton: the skeleton they were solved
     with, when it is not the true one (estimated calibration)."""
-    fk_t = [skeleton.forward_kinematics(th) for th in truth]
     fk_s = [(solved_skeleton or skeleton).forward_kinematics(th) for th in solved]
-    p_t, p_s = np.array([p for _, p in fk_t]), np.array([p for _, p in fk_s])
-    r_t, r_s = np.array([r for r, _ in fk_t]), np.array([r for r, _ in fk_s])
+    return transform_errors(skeleton, truth, np.array([p for _, p in fk_s]), np.array([r for r, _ in fk_s]), dt)
+
+
+def transform_errors(skeleton: _core.Skeleton, truth: np.ndarray, p_s: np.ndarray, r_s: np.ndarray,
+                     dt: float) -> dict:
+    """errors() of solved bone positions p_s (F, J, 3) and orientations r_s (F, J, 3, 3), as
+    the host publishes them (PoseFrame.joints: whatever skeleton each frame was solved with)."""
+    fk_t = [skeleton.forward_kinematics(th) for th in truth]
+    p_t, r_t = np.array([p for _, p in fk_t]), np.array([r for r, _ in fk_t])
     pos = np.linalg.norm(p_s - p_t, axis=-1)  # (F, J) m
     ori = np.degrees(rotations.angle_between(r_s, r_t))  # (F, J)
     vel = np.linalg.norm(np.diff(p_s, axis=0) - np.diff(p_t, axis=0), axis=-1) / dt  # (F-1, J) m/s

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import zmq
 
-from mocap import _core, demo_motion, paths, recording, transport, wire
-from mocap.calibration import window
+from mocap import _core, demo_motion, paths, recording, rotations, transport, wire
+from mocap.calibration import informative, window
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
 from mocap.solver import imu_set_json, layout_json
@@ -41,20 +41,27 @@ class Studio:
     frame_times: np.ndarray  # (F,) s, as the cameras report them
     camera_ids: list[str]
     endpoints: dict[str, str]  # "cam0".. "hub0", "host" -> endpoint
-    session_skeleton: _core.Skeleton  # the session's: estimated, or the truth's (oracle)
-    calibration: str  # "estimated" or "oracle"
+    session_skeleton: _core.Skeleton  # the session's: estimated, the truth's (oracle), the default's (live)
+    calibration: str  # "estimated", "oracle" or "live"
+    calibrator: str | None = None  # live: the calibrator's endpoint (its sessions in `calibrated`)
+
+    @property
+    def calibrated(self) -> Path:
+        """Where the live calibrator writes the session of its latest calibration."""
+        return self.session.parent / "calibrated"
 
 
 def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.Calibration:
-    """The calibration from the first seconds of the streams, as a studio's host calibrates
-    from the first seconds of a capture (mocap.calibration.window): nothing of the truth."""
+    """The calibration from the first seconds with motion of the streams, as `mocap calibrate`
+    makes a studio's session (mocap.calibration.window, informative): nothing of the truth."""
     keypoints = np.where(streams.detected[:, None, None, None], streams.keypoints, 0.0).astype(float)
     times = streams.frame_times_ns * 1e-9
     imu_times = streams.imu_times_ns * 1e-9
     readings = window.readings_at(times, [(name, bone, imu_times, streams.imu_quaternions[:, i],
                                            streams.imu_accelerations[:, i])
                                           for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
-    return window.estimate(rig, keypoints, times, streams.layout, readings)
+    first, _, why_not = informative.calibration_window(keypoints, times, readings, window.SECONDS)
+    return window.estimate(rig, keypoints, times, streams.layout, None if why_not else readings, start=first)
 
 
 def free_ports(n: int) -> list[int]:
@@ -68,14 +75,21 @@ def free_ports(n: int) -> list[int]:
 
 
 def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0,
-            calibration: str = "estimated") -> Studio:
-    """Simulates `seconds` of the demo motion and writes the session (skeleton, told rig,
-    IMU set, layout, prior, endpoints) and the stream file into `folder`. The skeleton and
-    the IMUs' mounting, heading and position are estimated from the streams' first seconds
-    (`calibrate`), or the truth's with calibration="oracle"."""
+            calibration: str = "estimated", still_s: float = 0.0) -> Studio:
+    """Simulates `seconds` of the demo motion (after standing still for still_s, if given)
+    and writes the session (skeleton, told rig, IMU set, layout, prior, endpoints) and the
+    stream file into `folder`. The skeleton and the IMUs' mounting, heading and position are
+    estimated from the streams' first seconds with motion before the take (`calibrate`), the
+    truth's with calibration="oracle", or, with "live", estimated during the take by the live
+    calibrator (mocap.calibrator; the session starts with the default skeleton and its IMUs
+    uncalibrated)."""
+    if calibration not in ("estimated", "oracle", "live"):
+        raise InputError(f"calibration is 'estimated', 'oracle' or 'live', not {calibration!r}")
     folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
+    if still_s > 0:
+        thetas = demo_motion.after_held_pose(thetas, thetas[min(len(thetas) - 1, round(3.0 / dt))], dt, still_s)
     config = sim_take.Config(preset=preset, cameras=cameras)
     t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
     # The IMUs sample at their own rate (the take's readings are at frame times).
@@ -93,27 +107,32 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
                       np.round(t.times * 1e9).astype(np.int64), keypoints, detected, [s.name for s in t.imus],
                       np.round(imu_times * 1e9).astype(np.int64), quats, accs)
     streams.save(folder / "streams.npz")
-    ports = free_ports(len(camera_ids) + 2)
-    endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host"], ports)}
+    ports = free_ports(len(camera_ids) + 3)
+    endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host", "calibrator"], ports)}
     session_skeleton, imus, layout = skeleton, t.imus, str(paths.LAYOUTS / f"{t.layout.name}.json")
     if calibration == "estimated":
         cal = calibrate(streams, t.rig, [s.bone for s in t.imus])
         session_skeleton, imus, layout = cal.skeleton, cal.imus, "layout.json"
         (folder / "calibration.json").write_text(json.dumps(cal.report, indent=1))
         (folder / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
-    elif calibration != "oracle":
-        raise InputError(f"calibration is 'estimated' or 'oracle', not {calibration!r}")
+    elif calibration == "live":  # what a studio knows before the performer moves: the IMU set's bones
+        session_skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+        imus = _core.load_imu_sites(str(paths.IMU_SETS[sim_take.PRESETS[preset].imus]), session_skeleton)
     (folder / "skeleton.json").write_text(session_skeleton.to_json())
     (folder / "rig.json").write_text(t.rig.to_json())
     (folder / "imus.json").write_text(json.dumps(imu_set_json(session_skeleton, imus), indent=1))
     session = {"format": "mocap.session/1", "skeleton": "skeleton.json", "rig": "rig.json", "imus": "imus.json",
                "layout": layout, "prior": str(paths.HOST_DATA / "prior_default.json"),
                "inputs": [endpoints[c] for c in [*camera_ids, "hub0"]], "output": endpoints["host"]}
-    if calibration == "estimated":
+    if calibration != "oracle":
         session["solver"] = {"heading_time_constant": window.HEADING_TIME_CONSTANT_S}
+    if calibration == "live":
+        session["inputs"].append(endpoints["calibrator"])
+        session["imus_calibrated"] = False
     (folder / "session.json").write_text(json.dumps(session, indent=1))
-    return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids, endpoints,
-                  session_skeleton, calibration)
+    return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids,
+                  {k: v for k, v in endpoints.items() if k != "calibrator"}, session_skeleton, calibration,
+                  endpoints["calibrator"] if calibration == "live" else None)
 
 
 @dataclasses.dataclass
@@ -147,9 +166,15 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
     if "imu" in faults:
         cmd += ["--stop-sensor", faults["imu"][0], "--stop", *map(str, faults["imu"][1:])]
     edge.append(subprocess.Popen(cmd))
+    if studio.calibrator:  # the live calibrator, beside mocapd
+        edge_endpoints = [studio.endpoints[c] for c in [*studio.camera_ids, "hub0"]]
+        edge.append(subprocess.Popen([sys.executable, "-m", "mocap.cli", "calibrate", "--connect", *edge_endpoints,
+                                      "--session", str(studio.session), "--out", str(studio.calibrated), "--follow",
+                                      "--publish", studio.calibrator, "--duration", f"{LEAD_S + duration + 1.0:.3f}"]))
     recorder, stop = None, threading.Event()
     if record:
-        recorder = threading.Thread(target=recording.record, args=(list(studio.endpoints.values()), record),
+        inputs = [*studio.endpoints.values(), *([studio.calibrator] if studio.calibrator else [])]
+        recorder = threading.Thread(target=recording.record, args=(inputs, record),
                                     kwargs={"stop": stop, "session": studio.session}, daemon=True)
         recorder.start()
     context = zmq.Context.instance()
@@ -199,7 +224,8 @@ def score(studio: Studio, run: Run) -> dict:
     frame_ns = run.start_ns + np.round(studio.frame_times * 1e9).astype(np.int64)
     by_time = {p.capture_time_ns: p for p in run.poses}
     matched = [f for f, t in enumerate(frame_ns) if t in by_time]
-    solved = np.array([list(by_time[frame_ns[f]].theta) for f in matched])
+    poses = [by_time[frame_ns[f]] for f in matched]
+    solved = np.array([list(p.theta) for p in poses])
     latency = np.array([p.latency_ms for p in run.poses])
     out = {"frames": len(frame_ns), "solved": len(matched), "dropped": len(frame_ns) - len(matched),
            "latency_p50_ms": float(np.percentile(latency, 50)) if len(latency) else None,
@@ -210,11 +236,22 @@ def score(studio: Studio, run: Run) -> dict:
            "heading_corrections_deg": {s.stream.removeprefix("imu/"): s.heading_correction_deg
                                        for s in (run.healths[-1].streams if run.healths else [])
                                        if s.stream.startswith("imu/")}}
-    if len(matched) > 2:
-        e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, float(np.median(np.diff(studio.frame_times))),
-                              studio.session_skeleton)
-        out.update({k: e[k] for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm",
-                                      "joint_centres_vel_cms")})
+    keys = ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm", "joint_centres_vel_cms")
+    dt = float(np.median(np.diff(studio.frame_times)))
+    if len(matched) > 2:  # the bones as published: each frame with the calibration it was solved with
+        positions = np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in poses])
+        orientations = rotations.matrix_from_quaternion(np.array([[[j.qw, j.qx, j.qy, j.qz] for j in p.joints]
+                                                                  for p in poses]))
+        e = evaluation.transform_errors(studio.skeleton, studio.truth[matched], positions, orientations, dt)
+        out.update({k: e[k] for k in keys})
+        with_imus = np.array([len(p.imus) > 0 for p in poses])
+        if studio.calibration == "live" and with_imus.any():  # from the first calibration on
+            first = int(np.argmax(with_imus))
+            out["calibrated_from_s"] = float(studio.frame_times[matched[first]])
+            if len(poses) - first > 2:
+                e = evaluation.transform_errors(studio.skeleton, studio.truth[matched[first:]], positions[first:],
+                                                orientations[first:], dt)
+                out["calibrated"] = {k: e[k] for k in keys}
     out["thetas"], out["times"] = solved, studio.frame_times[matched]
     return out
 

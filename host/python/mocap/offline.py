@@ -16,9 +16,10 @@ FLUSH_NS = 1_000_000_000  # after the last input: frames still waiting are hande
 
 
 def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict]:
-    """PoseFrames of the recording's inputs (/camera/*, /imu/*) solved with the session's
-    skeleton, rig, layout and IMU set (by default the session attached to the recording);
-    and the inputs dropped, by reason."""
+    """PoseFrames of the recording's inputs (/camera/*, /imu/*, and the live calibrator's
+    /calibration/*) solved with the session's skeleton, rig, layout and IMU set (by default
+    the session attached to the recording), as calibrations came; and the inputs dropped, by
+    reason."""
     if session is None:
         with tempfile.TemporaryDirectory() as folder:
             attached = recording.read_session(path, folder)
@@ -28,7 +29,7 @@ def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict
     pipeline = _core.HostPipeline.load(str(session))
     poses, now = [], 0
     for m in recording.read(path):
-        if not m.topic.startswith(("/camera/", "/imu/")):
+        if not m.topic.startswith(("/camera/", "/imu/", "/calibration/")):
             continue
         now = m.log_time_ns
         pipeline.feed(m.type_name.encode(), m.payload, now)

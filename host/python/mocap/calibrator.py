@@ -1,0 +1,159 @@
+"""The live calibrator, `mocap calibrate --connect EP... --session S --out DIR --follow
+--publish EP`: beside mocapd, it listens to the edge boxes and IMU hubs, keeps their last
+seconds, and publishes a Calibration (proto/mocap/v1/calibration.proto) that mocapd applies
+from its capture time on (a session may start with "imus_calibrated": false: mocapd then
+solves from video alone until the first one comes).
+
+When (the Policy):
+- the first calibration as soon as the last `seconds` had enough motion
+  (informative.GOOD_SCORE_DEG), or, after max_wait_s, from the last `seconds` if they move at
+  all (informative.MIN_SCORE_DEG);
+- then again, refined as capture goes on, when the last `seconds` move REFINE_FACTOR times as
+  much as the window in use did (a performer who only shuffled at first and walks now), at
+  most every MIN_INTERVAL_S.
+
+Each calibration is computed in a worker process at low priority (about 12 s on two cores;
+mocapd keeps its latency), written to DIR as a session (so a restarted mocapd starts with
+the latest), and published; the latest is published again every REPEAT_S for hosts that
+connect later (mocapd takes a sequence once).
+"""
+
+from __future__ import annotations
+
+import collections
+import concurrent.futures
+import dataclasses
+import json
+import logging
+import os
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import zmq
+
+from mocap import calibrate, transport, wire
+from mocap.calibration import informative, window
+from mocap.errors import InputError
+
+log = logging.getLogger(__name__)
+
+REFINE_FACTOR = 1.5
+MIN_INTERVAL_S = 20.0
+REPEAT_S = 2.0
+CHECK_S = 1.0  # how often the policy looks at the motion
+MARGIN_S = 1.5  # kept beyond the window: the cameras' and IMUs' latest messages differ
+
+
+@dataclasses.dataclass
+class Policy:
+    """When to calibrate, from the motion score of the last `seconds` (see the module docstring)."""
+    max_wait_s: float = 30.0
+    refine_factor: float = REFINE_FACTOR
+    min_interval_s: float = MIN_INTERVAL_S
+
+    def due(self, score: float, elapsed_s: float, in_use: float | None, since_last_s: float) -> bool:
+        """Calibrate now? score: the last seconds' motion; elapsed_s: since the first message;
+        in_use: the score of the window in use (None: none yet); since_last_s: since the last
+        calibration was started."""
+        if not np.isfinite(score) or score < informative.MIN_SCORE_DEG:
+            return False
+        if in_use is None:
+            return score >= informative.GOOD_SCORE_DEG or elapsed_s >= self.max_wait_s
+        return since_last_s >= self.min_interval_s and score >= self.refine_factor * in_use
+
+
+class Buffer:
+    """The camera and IMU messages of the last `keep_s` seconds, by arrival."""
+
+    def __init__(self, keep_s: float):
+        self.keep_ns = int(keep_s * 1e9)
+        self.items: collections.deque[tuple[int, str, bytes]] = collections.deque()
+
+    def add(self, arrival_ns: int, type_name: str, payload: bytes) -> None:
+        self.items.append((arrival_ns, type_name, payload))
+        while self.items and self.items[0][0] < arrival_ns - self.keep_ns:
+            self.items.popleft()
+
+    def snapshot(self) -> list[tuple[str, bytes]]:
+        return [(t, p) for _, t, p in self.items]
+
+
+def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float) -> calibrate.Estimated:
+    """In the worker process."""
+    return calibrate.estimate(messages, Path(session), seconds, "the live streams")
+
+
+def _low_priority() -> None:
+    os.nice(10)
+
+
+def message(source: str, sequence: int, estimated: calibrate.Estimated, valid_from_ns: int) -> wire.Calibration:
+    return wire.Calibration(source=source, sequence=sequence, valid_from_ns=valid_from_ns,
+                            skeleton_json=estimated.skeleton_json, imus_json=estimated.imus_json,
+                            layout_json=estimated.layout_json, report_json=json.dumps(estimated.report))
+
+
+def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds: float = window.SECONDS,
+           policy: Policy = Policy(), stop: threading.Event | None = None, source: str = "calibrator",
+           duration_s: float | None = None) -> list[dict]:
+    """Runs the live calibrator until `stop` is set (or duration_s passed); returns what it
+    published, one dict per calibration (sequence, valid_from_ns, window score, report)."""
+    stop = stop or threading.Event()
+    session = Path(session).resolve()
+    buffer, motion = Buffer(seconds + MARGIN_S), calibrate.MotionWatch(seconds)
+    published: list[dict] = []
+    latest: wire.Calibration | None = None
+    job, job_score, in_use = None, 0.0, None
+    first = last_check = last_start = last_repeat = None
+    deadline = None if duration_s is None else time.monotonic() + duration_s
+    context = zmq.Context.instance()
+    with concurrent.futures.ProcessPoolExecutor(1, initializer=_low_priority) as pool, \
+            transport.subscriber(context, endpoints) as sub, transport.publisher(context, publish) as pub:
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+            if sub.poll(100):
+                while True:
+                    try:
+                        frames = sub.recv_multipart(zmq.NOBLOCK)
+                    except zmq.Again:
+                        break
+                    try:
+                        msg = wire.decode(frames)
+                    except wire.WireError:
+                        continue  # mocapd counts what is malformed; the calibrator only skips it
+                    if isinstance(msg, (wire.KeypointFrame, wire.ImuBatch)):
+                        buffer.add(time.time_ns(), msg.DESCRIPTOR.full_name, bytes(frames[1]))
+                        first = first or time.monotonic()
+                    if isinstance(msg, wire.ImuBatch):
+                        motion.add(msg)
+            now = time.monotonic()
+            if job is not None and job.done():
+                try:
+                    estimated = job.result()
+                except InputError as e:
+                    log.warning("calibration failed: %s", e)
+                else:
+                    valid_from = time.time_ns()
+                    latest = message(source, len(published), estimated, valid_from)
+                    in_use = job_score
+                    record = {"sequence": latest.sequence, "valid_from_ns": valid_from, "score_deg": job_score,
+                              **estimated.report}
+                    calibrate.write_session(Path(out), session, estimated, record)
+                    pub.send_multipart(wire.encode(latest))
+                    last_repeat = now
+                    published.append(record)
+                    log.info("calibration %d published (the last %.0f s moved %.1f deg)", latest.sequence, seconds,
+                             job_score)
+                job = None
+            if latest is not None and now - last_repeat >= REPEAT_S:
+                pub.send_multipart(wire.encode(latest))
+                last_repeat = now
+            if job is None and first is not None and (last_check is None or now - last_check >= CHECK_S):
+                last_check = now
+                elapsed = now - first
+                score = motion.score() if elapsed >= seconds else float("nan")
+                if policy.due(score, elapsed, in_use, now - last_start if last_start else np.inf):
+                    job, job_score, last_start = pool.submit(_estimate, buffer.snapshot(), str(session), seconds), \
+                        score, now
+    return published
