@@ -51,7 +51,7 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
 
     # The recording (session attached) solved offline through the same pipeline gives the
     # live poses back.
-    poses, _ = offline.solve_recording(tmp_path / "take.mcap")
+    poses, *_ = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
     common = [p for p in poses if p.capture_time_ns in live_by_time]
     assert len(common) >= 0.98 * len(run.poses)
@@ -186,7 +186,7 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(or
     assert len(report["imus_calibrated"]) == 13 and not report["imus_missing"]
     calibrated = _core.Skeleton.load(str(tmp_path / "cal" / "skeleton.json"))
     assert not np.allclose(calibrated.offsets, studio.skeleton.offsets, atol=1e-3)  # estimated, not copied
-    poses, _ = offline.solve_recording(take, tmp_path / "cal" / "session.json")
+    poses, *_ = offline.solve_recording(take, tmp_path / "cal" / "session.json")
     frame_ns = run.start_ns + np.round(studio.frame_times * 1e9).astype(np.int64)
     by_time = {p.capture_time_ns: np.array(p.theta) for p in poses}
     matched = [f for f, t in enumerate(frame_ns) if t in by_time]
@@ -264,10 +264,12 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     session = json.loads((studio.calibrated / "session.json").read_text())
     assert session["imus_calibrated"] and (studio.calibrated / session["layout"]).is_file()
 
-    poses, _ = offline.solve_recording(tmp_path / "take.mcap")
+    poses, _, skeleton = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
     common = [p for p in poses if p.capture_time_ns in live_by_time]
     assert len(common) >= 0.98 * len(run.poses)
     diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in common]
     assert np.median(diff) < 1e-6, np.percentile(diff, [50, 90, 100])
     assert sum(len(p.imus) == 13 for p in poses) > 0.9 * (with_imus == 13).sum()
+    calibrated = _core.Skeleton.load(str(studio.calibrated / "skeleton.json"))
+    assert np.allclose(skeleton.offsets, calibrated.offsets, atol=1e-9)  # the BVH's skeleton: the latest

@@ -537,5 +537,9 @@ PYBIND11_MODULE(_core, m) {
       .def("health", [](HostPipeline& p,
                         int64_t now_ns) { return py::bytes(p.Health(now_ns).SerializeAsString()); })
       .def_property_readonly("dropped", &HostPipeline::dropped)
+      .def_property_readonly(
+          "skeleton", [](const HostPipeline& p) { return p.session().skeleton; },
+          "the skeleton in use: the session's, or the latest calibration's")
+      .def_property_readonly("calibrations_applied", &HostPipeline::calibrations_applied)
       .def_property_readonly("frames_solved", &HostPipeline::frames_solved);
 }

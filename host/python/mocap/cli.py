@@ -139,23 +139,22 @@ def _solve(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from mocap import _core, offline, recording
+    from mocap import offline, recording
     from mocap.export.bvh import write_bvh
-    from mocap.export.joints_csv import write_joints_csv
+    from mocap.export.joints_csv import write_positions_csv
 
     with tempfile.TemporaryDirectory() as folder:
         session = Path(args.session) if args.session else recording.read_session(args.recording, folder)
         if session is None:
             raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
-        poses, dropped = offline.solve_recording(Path(args.recording), session)
-        skeleton = _core.Skeleton.load(str(session.parent / json.loads(session.read_text())["skeleton"]))
+        poses, dropped, skeleton = offline.solve_recording(Path(args.recording), session)
     if not poses:
         raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped})")
     thetas = np.array([list(p.theta) for p in poses])
-    write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))
-    if args.csv:
+    write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))  # the latest calibration's skeleton
+    if args.csv:  # the bones as solved, each frame with the calibration in use then
         times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
-        write_joints_csv(args.csv, skeleton, thetas, times)
+        write_positions_csv(args.csv, skeleton.bone_names, offline.joint_positions(poses), times)
     print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped}), flush=True)
     return 0
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mocap import _core, live
 from mocap.export.bvh import write_bvh
-from mocap.export.joints_csv import write_joints_csv
+from mocap.export.joints_csv import write_positions_csv
 from mocap.export.vmc import VmcSender
 
 
@@ -91,7 +91,8 @@ def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record
         studio.session_skeleton = _core.Skeleton.load(str(studio.calibrated / "skeleton.json"))
     if len(result["thetas"]):
         write_bvh(out / "demo.bvh", studio.session_skeleton, result["thetas"], 60.0)
-        write_joints_csv(out / "demo_joints.csv", studio.session_skeleton, result["thetas"], result["times"])
+        write_positions_csv(out / "demo_joints.csv", studio.session_skeleton.bone_names, result["positions"],
+                            result["times"])
     (out / "report.md").write_text(report(result, seconds, studio))
     print((out / "report.md").read_text(), file=sys.stderr)
     return result

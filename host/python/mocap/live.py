@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import zmq
 
-from mocap import _core, demo_motion, paths, recording, rotations, transport, wire
+from mocap import _core, demo_motion, offline, paths, recording, rotations, transport, wire
 from mocap.calibration import informative, window
 from mocap.errors import InputError
 from mocap.sim import take as sim_take
@@ -239,7 +239,7 @@ def score(studio: Studio, run: Run) -> dict:
     keys = ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm", "joint_centres_vel_cms")
     dt = float(np.median(np.diff(studio.frame_times)))
     if len(matched) > 2:  # the bones as published: each frame with the calibration it was solved with
-        positions = np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in poses])
+        positions = offline.joint_positions(poses)
         orientations = rotations.matrix_from_quaternion(np.array([[[j.qw, j.qx, j.qy, j.qz] for j in p.joints]
                                                                   for p in poses]))
         e = evaluation.transform_errors(studio.skeleton, studio.truth[matched], positions, orientations, dt)
@@ -253,6 +253,7 @@ def score(studio: Studio, run: Run) -> dict:
                                                 orientations[first:], dt)
                 out["calibrated"] = {k: e[k] for k in keys}
     out["thetas"], out["times"] = solved, studio.frame_times[matched]
+    out["positions"] = offline.joint_positions(poses)  # (F, J, 3) as published
     return out
 
 

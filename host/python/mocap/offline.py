@@ -15,11 +15,11 @@ from mocap.errors import InputError
 FLUSH_NS = 1_000_000_000  # after the last input: frames still waiting are handed over
 
 
-def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict]:
+def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict, _core.Skeleton]:
     """PoseFrames of the recording's inputs (/camera/*, /imu/*, and the live calibrator's
     /calibration/*) solved with the session's skeleton, rig, layout and IMU set (by default
-    the session attached to the recording), as calibrations came; and the inputs dropped, by
-    reason."""
+    the session attached to the recording), as calibrations came; the inputs dropped, by
+    reason; and the skeleton in use at the end (the latest calibration's)."""
     if session is None:
         with tempfile.TemporaryDirectory() as folder:
             attached = recording.read_session(path, folder)
@@ -35,7 +35,13 @@ def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict
         pipeline.feed(m.type_name.encode(), m.payload, now)
         poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now)]
     poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now + FLUSH_NS)]
-    return poses, dict(pipeline.dropped)
+    return poses, dict(pipeline.dropped), pipeline.skeleton
+
+
+def joint_positions(poses: list) -> np.ndarray:
+    """(F, J, 3) m: the bone origins as the host published them (PoseFrame.joints), each
+    frame with the calibration it was solved with."""
+    return np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in poses])
 
 
 def frame_rate(poses: list) -> float:

@@ -229,3 +229,21 @@ def test_vmc_send_failures_are_counted_not_raised(skeleton):
     refused = VmcSender(skeleton, host="255.255.255.255", port=port)  # broadcast, not enabled: EACCES
     assert not refused.send(theta, 0.0) and refused.failures == 1
     refused.close()
+
+
+def test_positions_csv_writes_published_bones_and_refuses_what_is_not_finite(tmp_path, skeleton, fk):
+    """The bones as the host published them (each frame with the calibration in use then)."""
+    from mocap.export.joints_csv import write_positions_csv
+
+    path = tmp_path / "published.csv"
+    positions = fk[1].reshape(FRAMES, -1, 3)
+    write_positions_csv(path, skeleton.bone_names, positions, np.arange(FRAMES) / FRAME_RATE)
+    with open(path, newline="") as f:
+        values = np.array(list(csv.reader(f))[1:], dtype=float)
+    np.testing.assert_allclose(values[:, 2:], positions.reshape(FRAMES, -1), atol=1e-6)
+    bad = positions.copy()
+    bad[4, 2, 1] = np.nan
+    with pytest.raises(ValueError, match="frame 4: position"):
+        write_positions_csv(path, skeleton.bone_names, bad, np.arange(FRAMES) / FRAME_RATE)
+    with pytest.raises(ValueError, match="positions must be"):
+        write_positions_csv(path, skeleton.bone_names, positions[:, :5], np.arange(FRAMES) / FRAME_RATE)
