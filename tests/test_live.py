@@ -203,6 +203,23 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(or
         calibrate.calibrate(bare, tmp_path / "none")
 
 
+def test_without_imu_messages_the_calibration_is_the_skeleton_from_video(oracle_take):
+    """What the live calibrator publishes when no IMU sends (a video-only studio, or a hub
+    that is late): the skeleton and keypoint sites, and no IMU site — mocapd then keeps
+    solving from video alone."""
+    from mocap import calibrate
+
+    studio, _, take = oracle_take
+    cameras_only = [(m.type_name, m.payload) for m in recording.read(take) if m.topic.startswith("/camera/")]
+    estimated = calibrate.estimate(cameras_only, studio.session, 5.0, "cameras only")
+    assert json.loads(estimated.imus_json)["imus"] == [] and len(estimated.report["imus_missing"]) == 13
+    assert estimated.report["window_motion_score_deg"] is None
+    lengths = np.linalg.norm(_core.Skeleton.from_json(estimated.skeleton_json).offsets, axis=1)
+    truth = np.linalg.norm(studio.skeleton.offsets, axis=1)
+    shin = studio.skeleton.bone_names.index("foot_l")  # the offset of the foot is the shin's length
+    assert abs(lengths[shin] - truth[shin]) < 0.03, (lengths[shin], truth[shin])
+
+
 def test_calibrate_connect_records_the_live_streams_then_calibrates(oracle_take, tmp_path):
     """`mocap calibrate --connect EP --session S`: the oracle take replayed live onto EP is
     recorded for the window and calibrated, as from the recording itself."""

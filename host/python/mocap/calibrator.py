@@ -10,7 +10,10 @@ When (the Policy):
   all (informative.MIN_SCORE_DEG);
 - then again, refined as capture goes on, when the last `seconds` move REFINE_FACTOR times as
   much as the window in use did (a performer who only shuffled at first and walks now), at
-  most every MIN_INTERVAL_S.
+  most every MIN_INTERVAL_S;
+- with no IMU sending, the skeleton and keypoint sites from video alone after `seconds`
+  (a video-only studio, or a hub that is late: when its IMUs move, a calibration with them
+  follows).
 
 Each calibration is computed in a worker process at low priority (about 12 s on two cores;
 mocapd keeps its latency), written to DIR as a session (so a restarted mocapd starts with
@@ -54,14 +57,20 @@ class Policy:
     min_interval_s: float = MIN_INTERVAL_S
 
     def due(self, score: float, elapsed_s: float, in_use: float | None, since_last_s: float) -> bool:
-        """Calibrate now? score: the last seconds' motion; elapsed_s: since the first message;
-        in_use: the score of the window in use (None: none yet); since_last_s: since the last
-        calibration was started."""
-        if not np.isfinite(score) or score < informative.MIN_SCORE_DEG:
-            return False
+        """Calibrate now? score: the last seconds' motion (NaN: no IMU readings in them);
+        elapsed_s: since the first message (at least the window's length); in_use: the score
+        of the calibration in use (None: none yet; NaN: one from video alone); since_last_s:
+        since the last calibration was started."""
+        moving = bool(np.isfinite(score) and score >= informative.MIN_SCORE_DEG)
         if in_use is None:
-            return score >= informative.GOOD_SCORE_DEG or elapsed_s >= self.max_wait_s
-        return since_last_s >= self.min_interval_s and score >= self.refine_factor * in_use
+            if not np.isfinite(score):  # no IMU sends: the skeleton from video alone
+                return True
+            return moving and (score >= informative.GOOD_SCORE_DEG or elapsed_s >= self.max_wait_s)
+        if since_last_s < self.min_interval_s or not moving:
+            return False
+        if not np.isfinite(in_use):  # calibrated from video alone, and now IMUs move
+            return score >= informative.GOOD_SCORE_DEG
+        return score >= self.refine_factor * in_use
 
 
 class Buffer:
@@ -137,14 +146,14 @@ def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds
                     valid_from = time.time_ns()
                     latest = message(source, len(published), estimated, valid_from)
                     in_use = job_score
-                    record = {"sequence": latest.sequence, "valid_from_ns": valid_from, "score_deg": job_score,
-                              **estimated.report}
+                    record = {"sequence": latest.sequence, "valid_from_ns": valid_from,
+                              "score_deg": job_score if np.isfinite(job_score) else None, **estimated.report}
                     calibrate.write_session(Path(out), session, estimated, record)
                     pub.send_multipart(wire.encode(latest))
                     last_repeat = now
                     published.append(record)
-                    log.info("calibration %d published (the last %.0f s moved %.1f deg)", latest.sequence, seconds,
-                             job_score)
+                    log.info("calibration %d published (the last %.0f s: IMUs moved %.1f deg)", latest.sequence,
+                             seconds, job_score)
                 job = None
             if latest is not None and now - last_repeat >= REPEAT_S:
                 pub.send_multipart(wire.encode(latest))
@@ -152,8 +161,8 @@ def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds
             if job is None and first is not None and (last_check is None or now - last_check >= CHECK_S):
                 last_check = now
                 elapsed = now - first
-                score = motion.score() if elapsed >= seconds else float("nan")
-                if policy.due(score, elapsed, in_use, now - last_start if last_start else np.inf):
+                score = motion.score()
+                if elapsed >= seconds and policy.due(score, elapsed, in_use, now - last_start if last_start else np.inf):
                     job, job_score, last_start = pool.submit(_estimate, buffer.snapshot(), str(session), seconds), \
                         score, now
     return published
