@@ -182,7 +182,7 @@ def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: floa
     if why_not:
         raise InputError(f"{where}: {why_not.split(';')[0]}: the performer should move (walk, "
                          f"swing the arms, bend) while the studio calibrates")
-    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, start=first)
+    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, first_frame=first)
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),
                      {"frames": len(frame_times), "first_frame_time_ns": int(t0),

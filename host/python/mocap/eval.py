@@ -143,7 +143,7 @@ def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
                                   t.accelerations)
     start, _, why_not = informative.calibration_window(det, t.times, readings, options.get("seconds", window.SECONDS))
     return window.estimate(t.rig, det, t.times, t.layout.name, None if why_not else readings,
-                           **{"start": start, **options})
+                           **{"first_frame": start, **options})
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),

@@ -61,7 +61,7 @@ def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.
                                            streams.imu_accelerations[:, i])
                                           for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
     first, _, why_not = informative.calibration_window(keypoints, times, readings, window.SECONDS)
-    return window.estimate(rig, keypoints, times, streams.layout, None if why_not else readings, start=first)
+    return window.estimate(rig, keypoints, times, streams.layout, None if why_not else readings, first_frame=first)
 
 
 def free_ports(n: int) -> list[int]:

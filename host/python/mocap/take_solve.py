@@ -69,7 +69,7 @@ def solve_take(folder: Path, out: Path) -> dict:
     first, score, why_not = informative.calibration_window(det, times, readings, window.SECONDS)
     if why_not:
         readings = None
-    cal = window.estimate(take.rig, det, times, take.layout, readings, start=first)
+    cal = window.estimate(take.rig, det, times, take.layout, readings, first_frame=first)
     solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
     thetas, statuses = window.solve_frames(solver, det, times, readings)
     out.mkdir(parents=True, exist_ok=True)

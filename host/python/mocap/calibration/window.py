@@ -218,18 +218,20 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
 
 def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
              readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
-             site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True, start: int = 0) -> Calibration:
+             site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True,
+             first_frame: int = 0) -> Calibration:
     """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings,
-    over the `seconds` from frame `start` on; the keypoint sites are estimated (step 4b) along
+    over the `seconds` from first_frame on; the keypoint sites are estimated (step 4b) along
     the directions known within site_std (m; 0: the layout's sites kept) when there are IMUs to
     pin the bones' orientations."""
-    if start:
+    if first_frame:
+        f = first_frame
         tail = None if readings is None else dataclasses.replace(
-            readings, quaternions=readings.quaternions[start:],
-            accelerations=None if readings.accelerations is None else readings.accelerations[start:])
-        c = estimate(rig, detections[start:], times[start:], layout_name, tail, seconds, step, site_std, use_held_pose)
-        c.window_frames = c.window_frames + start
-        c.report["window_start_s"] = float(times[start] - times[0])
+            readings, quaternions=readings.quaternions[f:],
+            accelerations=None if readings.accelerations is None else readings.accelerations[f:])
+        c = estimate(rig, detections[f:], times[f:], layout_name, tail, seconds, step, site_std, use_held_pose)
+        c.window_frames = c.window_frames + f
+        c.report["window_start_s"] = float(times[f] - times[0])
         return c
     estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0
     window = int(np.searchsorted(times, times[0] + seconds))
