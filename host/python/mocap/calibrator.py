@@ -38,7 +38,6 @@ import zmq
 
 from mocap import calibrate, transport, wire
 from mocap.calibration import informative, window
-from mocap.errors import InputError
 
 log = logging.getLogger(__name__)
 
@@ -104,18 +103,74 @@ def message(source: str, sequence: int, estimated: calibrate.Estimated, valid_fr
                             layout_json=estimated.layout_json, report_json=json.dumps(estimated.report))
 
 
+class LiveCalibrator:
+    """The calibrator's state between messages: what it heard, the job under way, what it
+    published (see the module docstring)."""
+
+    def __init__(self, session: Path, out: Path, seconds: float, policy: Policy, source: str,
+                 clock=time.monotonic):
+        self.session, self.out, self.seconds, self.policy, self.source = session, out, seconds, policy, source
+        self.clock = clock
+        self.buffer, self.motion = Buffer(seconds + MARGIN_S), calibrate.MotionWatch(seconds)
+        self.published: list[dict] = []
+        self.latest: wire.Calibration | None = None
+        self.job: concurrent.futures.Future | None = None
+        self.job_score, self.in_use = float("nan"), None
+        self.first = self.last_check = self.last_start = self.last_sent = None
+
+    def hear(self, frames: list[bytes]) -> None:
+        try:
+            msg = wire.decode(frames)
+        except wire.WireError:
+            return  # mocapd counts what is malformed; the calibrator only skips it
+        if isinstance(msg, (wire.KeypointFrame, wire.ImuBatch)):
+            self.buffer.add(time.time_ns(), msg.DESCRIPTOR.full_name, bytes(frames[1]))
+            self.first = self.first or self.clock()
+        if isinstance(msg, wire.ImuBatch):
+            self.motion.add(msg)
+
+    def step(self, pool: concurrent.futures.Executor, pub: zmq.Socket) -> None:
+        """Publishes a finished calibration, repeats the latest, starts one when due."""
+        now = self.clock()
+        if self.job is not None and self.job.done():
+            self._publish(self.job, pub, now)
+            self.job = None
+        if self.latest is not None and now - self.last_sent >= REPEAT_S:
+            pub.send_multipart(wire.encode(self.latest))
+            self.last_sent = now
+        if self.job is None and self.first is not None and (self.last_check is None or now - self.last_check >= CHECK_S):
+            self.last_check = now
+            score, since = self.motion.score(), now - self.last_start if self.last_start else np.inf
+            if now - self.first >= self.seconds and self.policy.due(score, now - self.first, self.in_use, since):
+                self.job = pool.submit(_estimate, self.buffer.snapshot(), str(self.session), self.seconds)
+                self.job_score, self.last_start = score, now
+
+    def _publish(self, job: concurrent.futures.Future, pub: zmq.Socket, now: float) -> None:
+        try:
+            estimated = job.result()
+        except Exception as e:  # noqa: BLE001 - a failed estimate is logged; the calibrator goes on
+            log.warning("calibration failed: %s", e)
+            return
+        valid_from = time.time_ns()
+        self.latest = message(self.source, len(self.published), estimated, valid_from)
+        self.in_use = self.job_score
+        record = {"sequence": self.latest.sequence, "valid_from_ns": valid_from,
+                  "score_deg": self.job_score if np.isfinite(self.job_score) else None, **estimated.report}
+        calibrate.write_session(self.out, self.session, estimated, record)
+        pub.send_multipart(wire.encode(self.latest))
+        self.last_sent = now
+        self.published.append(record)
+        log.info("calibration %d published (the last %.0f s: IMUs moved %.1f deg)", self.latest.sequence,
+                 self.seconds, self.job_score)
+
+
 def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds: float = window.SECONDS,
            policy: Policy = Policy(), stop: threading.Event | None = None, source: str = "calibrator",
            duration_s: float | None = None) -> list[dict]:
     """Runs the live calibrator until `stop` is set (or duration_s passed); returns what it
     published, one dict per calibration (sequence, valid_from_ns, window score, report)."""
     stop = stop or threading.Event()
-    session = Path(session).resolve()
-    buffer, motion = Buffer(seconds + MARGIN_S), calibrate.MotionWatch(seconds)
-    published: list[dict] = []
-    latest: wire.Calibration | None = None
-    job, job_score, in_use = None, 0.0, None
-    first = last_check = last_start = last_repeat = None
+    calibrator = LiveCalibrator(Path(session).resolve(), Path(out), seconds, policy, source)
     deadline = None if duration_s is None else time.monotonic() + duration_s
     context = zmq.Context.instance()
     with concurrent.futures.ProcessPoolExecutor(1, initializer=_low_priority) as pool, \
@@ -124,45 +179,8 @@ def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds
             if sub.poll(100):
                 while True:
                     try:
-                        frames = sub.recv_multipart(zmq.NOBLOCK)
+                        calibrator.hear(sub.recv_multipart(zmq.NOBLOCK))
                     except zmq.Again:
                         break
-                    try:
-                        msg = wire.decode(frames)
-                    except wire.WireError:
-                        continue  # mocapd counts what is malformed; the calibrator only skips it
-                    if isinstance(msg, (wire.KeypointFrame, wire.ImuBatch)):
-                        buffer.add(time.time_ns(), msg.DESCRIPTOR.full_name, bytes(frames[1]))
-                        first = first or time.monotonic()
-                    if isinstance(msg, wire.ImuBatch):
-                        motion.add(msg)
-            now = time.monotonic()
-            if job is not None and job.done():
-                try:
-                    estimated = job.result()
-                except InputError as e:
-                    log.warning("calibration failed: %s", e)
-                else:
-                    valid_from = time.time_ns()
-                    latest = message(source, len(published), estimated, valid_from)
-                    in_use = job_score
-                    record = {"sequence": latest.sequence, "valid_from_ns": valid_from,
-                              "score_deg": job_score if np.isfinite(job_score) else None, **estimated.report}
-                    calibrate.write_session(Path(out), session, estimated, record)
-                    pub.send_multipart(wire.encode(latest))
-                    last_repeat = now
-                    published.append(record)
-                    log.info("calibration %d published (the last %.0f s: IMUs moved %.1f deg)", latest.sequence,
-                             seconds, job_score)
-                job = None
-            if latest is not None and now - last_repeat >= REPEAT_S:
-                pub.send_multipart(wire.encode(latest))
-                last_repeat = now
-            if job is None and first is not None and (last_check is None or now - last_check >= CHECK_S):
-                last_check = now
-                elapsed = now - first
-                score = motion.score()
-                if elapsed >= seconds and policy.due(score, elapsed, in_use, now - last_start if last_start else np.inf):
-                    job, job_score, last_start = pool.submit(_estimate, buffer.snapshot(), str(session), seconds), \
-                        score, now
-    return published
+            calibrator.step(pool, pub)
+    return calibrator.published

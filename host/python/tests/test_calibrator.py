@@ -40,3 +40,76 @@ def test_the_buffer_keeps_the_last_seconds_by_arrival():
         b.add(int(k * 0.1e9), "mocap.v1.ImuBatch", bytes([k]))
     kept = b.snapshot()
     assert len(kept) == 21 and kept[0] == ("mocap.v1.ImuBatch", bytes([29])) and kept[-1][1] == bytes([49])
+
+
+class FakePub:
+    def __init__(self):
+        self.sent = []
+
+    def send_multipart(self, frames):
+        self.sent.append(frames)
+
+
+class Immediate:
+    """An executor that runs the job at once (or fails it)."""
+
+    def __init__(self, fail: bool = False):
+        self.fail, self.calls = fail, 0
+
+    def submit(self, fn, *args):
+        import concurrent.futures
+
+        self.calls += 1
+        f = concurrent.futures.Future()
+        if self.fail:
+            f.set_exception(ValueError("calibration: the window solve failed"))
+        else:
+            from mocap import calibrate
+
+            f.set_result(calibrate.Estimated('{"skeleton": 1}', '{"imus": []}', '{"layout": 1}', {"frames": 3}))
+        return f
+
+
+def moving_batches(seconds: float, amplitude_deg: float):
+    """ImuBatch payloads of two sensors tilting sinusoidally, 100 Hz, 10 samples each."""
+    from mocap import wire
+    from test_informative import readings
+
+    t = np.arange(int(seconds * 100)) / 100.0
+    q = readings(amplitude_deg * np.sin(2 * np.pi * t), sensors=2)
+    for k in range(0, len(t), 10):
+        b = wire.ImuBatch(hub_id="hub0", sequence=k // 10)
+        for f in range(k, k + 10):
+            for i in range(2):
+                s = b.samples.add(sensor_id=f"s{i}", sample_time_ns=int(t[f] * 1e9))
+                s.qw, s.qx, s.qy, s.qz = q[f, i]
+        yield t[k], wire.encode(b)
+
+
+def test_the_calibrator_publishes_when_due_repeats_and_survives_a_failed_estimate(tmp_path):
+    from mocap import wire
+
+    now = [0.0]
+    session = tmp_path / "session.json"
+    session.write_text('{"format": "mocap.session/1", "skeleton": "s.json", "rig": "r.json", "imus": "i.json", '
+                       '"layout": "l.json", "inputs": [], "output": ""}')
+    (tmp_path / "r.json").write_text("{}")  # copied into the calibrated session
+    for fail in (True, False):
+        c = calibrator.LiveCalibrator(session, tmp_path / f"out{fail}", 5.0, calibrator.Policy(), "calibrator",
+                                      clock=lambda: now[0])
+        pool, pub = Immediate(fail), FakePub()
+        for t, frames in moving_batches(8.0, 30.0):
+            now[0] = t
+            c.hear(frames)
+            c.step(pool, pub)
+        assert pool.calls >= 1  # due once 5 s of motion were heard
+        if fail:  # logged, nothing published, the calibrator goes on
+            assert pub.sent == [] and c.published == []
+            continue
+        assert len(c.published) == 1 and pool.calls == 1
+        first = wire.decode(pub.sent[0])
+        assert isinstance(first, wire.Calibration) and first.sequence == 0 and first.skeleton_json == '{"skeleton": 1}'
+        now[0] += calibrator.REPEAT_S + 0.1
+        c.step(pool, pub)
+        assert len(pub.sent) >= 2 and wire.decode(pub.sent[-1]) == first  # repeated for late joiners
+        assert (tmp_path / "outFalse" / "calibration.json").is_file()
