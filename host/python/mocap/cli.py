@@ -292,8 +292,8 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                    help="a solver option, e.g. acceleration.weight=0.01 (repeatable)")
     e.add_argument("--calibration", default="estimated", choices=["estimated", "oracle"],
-                   help="estimated: skeleton, IMU mounting and heading from the take's first 5 s "
-                        "(mocap.calibration.window); oracle: the true ones (default estimated)")
+                   help="estimated: skeleton, keypoint sites, IMU mounting and heading from the take's first 5 s "
+                        "with motion (mocap.calibration.window); oracle: the true ones (default estimated)")
     e.add_argument("--site-std", type=float, default=None, metavar="MM",
                    help="estimated calibration: keep the keypoint sites' change along directions known within "
                         "this many mm (default 2; 0: keep the layout's sites)")

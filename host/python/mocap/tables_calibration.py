@@ -34,8 +34,9 @@ def _stats(values: np.ndarray, unit: str) -> str:
 def markdown(r: dict) -> list[str]:
     est, conf, tri = r["estimated"], r["configurations"], r["baselines"]["triangulation"]
     lines = ["", "## Estimated calibration (issue 6)", "",
-             "Each take calibrates itself from its first 5 s (`mocap.calibration.window`: skeleton, IMU mountings,",
-             "headings and positions; nothing of the truth is used), then is solved with that calibration.",
+             "Each take calibrates itself from its first 5 s with motion (`mocap.calibration.window`, `informative`:",
+             "skeleton, keypoint sites, IMU mountings, headings and positions; nothing of the truth is used), then is",
+             "solved with that calibration.",
              "Position and velocity errors over the 13 anatomical joint centres (`mocap.joint_centres`): a skeleton",
              "estimated from keypoints puts its pelvis origin, spine joints and clavicles where its own convention does,",
              "which no keypoint observes; the 21-bone figure is given too. Triangulation baseline: the same HQ takes.", "",
