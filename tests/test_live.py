@@ -267,17 +267,20 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert result["dropped"] == 0, result
     t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
     with_imus = np.array([len(p.imus) for p in run.poses])
-    # Measured (this machine, 2 cores shared with 11 processes): calibrated from 27 s (the
-    # computation at low priority takes about 20 s there), joint centres 2.5 cm from then.
+    # Measured (this machine, 2 cores shared with 11 processes): the quick calibration from
+    # 14 s on, the full one 12-15 s later; joint centres 2.55 cm from the first.
     assert "calibrated_from_s" in result, "no calibration reached mocapd during the take"
     start = result["calibrated_from_s"]
     assert start < 42.0 and (with_imus[t < start - 0.1] == 0).all() and (with_imus[t > start + 0.1] == 13).all()
     assert result["calibrated"]["joint_centres_pos_cm"] < 3.0, result["calibrated"]
     report = json.loads((studio.calibrated / "calibration.json").read_text())
     # From seconds that moved (the still start alone would not do: informative.MIN_SCORE_DEG).
-    assert report["sequence"] == 0 and report["window_motion_score_deg"] >= informative.GOOD_SCORE_DEG, report
+    assert report["window_motion_score_deg"] >= informative.GOOD_SCORE_DEG, report
+    published = result["calibrations"]  # quick first, the same seconds in full after it
+    assert published[0]["quick"] and abs(published[0]["take_s"] - start) < 0.5, published
+    assert all(not c["quick"] for c in published[1:])
     calibration = [s for s in run.healths[-1].streams if s.stream == "calibration"]
-    assert calibration and calibration[0].received == 1 and calibration[0].active
+    assert calibration and calibration[0].received == len(published) and calibration[0].active
     session = json.loads((studio.calibrated / "session.json").read_text())
     assert session["imus_calibrated"] and (studio.calibrated / session["layout"]).is_file()
 

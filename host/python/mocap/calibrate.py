@@ -148,10 +148,11 @@ class Estimated:
     report: dict
 
 
-def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: float, where: str) -> Estimated:
+def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: float, where: str,
+             quick: bool = False) -> Estimated:
     """The calibration of `session`'s subject from (type name, payload) messages of its
     cameras and IMU hubs (a recording, or the live calibrator's last seconds); InputError
-    when they cannot give one (`where` names them)."""
+    when they cannot give one (`where` names them). quick: window.estimate's."""
     config = json.loads(Path(session).read_text())
     base = Path(session).parent
     skeleton = _core.Skeleton.load(str(base / config["skeleton"]))
@@ -182,7 +183,7 @@ def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: floa
     if why_not:
         raise InputError(f"{where}: {why_not.split(';')[0]}: the performer should move (walk, "
                          f"swing the arms, bend) while the studio calibrates")
-    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, first_frame=first)
+    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, first_frame=first, quick=quick)
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),
                      {"frames": len(frame_times), "first_frame_time_ns": int(t0),

@@ -17,8 +17,9 @@ When (the Policy):
 
 Each calibration is computed in a worker process at low priority (about 12 s on two cores;
 mocapd keeps its latency), written to DIR as a session (so a restarted mocapd starts with
-the latest), and published; the latest is published again every REPEAT_S for hosts that
-connect later (mocapd takes a sequence once).
+the latest; DIR/calibrations.jsonl lists every one), and published; the latest is published again every REPEAT_S for hosts that
+connect later (mocapd takes a sequence once). The first is quick (window.estimate's quick:
+one window solve, about half the time) and the same seconds in full follow it at once.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ MIN_INTERVAL_S = 20.0
 REPEAT_S = 2.0
 CHECK_S = 1.0  # how often the policy looks at the motion
 MARGIN_S = 1.5  # kept beyond the window: the cameras' and IMUs' latest messages differ
+HISTORY = "calibrations.jsonl"  # in DIR: every calibration published, one JSON object per line
 
 
 @dataclasses.dataclass
@@ -88,9 +90,9 @@ class Buffer:
         return [(t, p) for _, t, p in self.items]
 
 
-def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float) -> calibrate.Estimated:
+def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float, quick: bool) -> calibrate.Estimated:
     """In the worker process."""
-    return calibrate.estimate(messages, Path(session), seconds, "the live streams")
+    return calibrate.estimate(messages, Path(session), seconds, "the live streams", quick=quick)
 
 
 def _low_priority() -> None:
@@ -116,6 +118,7 @@ class LiveCalibrator:
         self.latest: wire.Calibration | None = None
         self.job: concurrent.futures.Future | None = None
         self.job_score, self.in_use = float("nan"), None
+        self.full_of: list[tuple[str, bytes]] | None = None  # after a quick one: these, in full
         self.first = self.last_check = self.last_start = self.last_sent = None
 
     def hear(self, frames: list[bytes]) -> None:
@@ -138,18 +141,23 @@ class LiveCalibrator:
         if self.latest is not None and now - self.last_sent >= REPEAT_S:
             pub.send_multipart(wire.encode(self.latest))
             self.last_sent = now
+        if self.job is None and self.full_of is not None:  # the quick one is out: now in full
+            self.job, self.full_of = pool.submit(_estimate, self.full_of, str(self.session), self.seconds, False), None
         if self.job is None and self.first is not None and (self.last_check is None or now - self.last_check >= CHECK_S):
             self.last_check = now
             score, since = self.motion.score(), now - self.last_start if self.last_start else np.inf
             if now - self.first >= self.seconds and self.policy.due(score, now - self.first, self.in_use, since):
-                self.job = pool.submit(_estimate, self.buffer.snapshot(), str(self.session), self.seconds)
+                messages, quick = self.buffer.snapshot(), self.in_use is None
+                self.job = pool.submit(_estimate, messages, str(self.session), self.seconds, quick)
                 self.job_score, self.last_start = score, now
+                self.full_of = messages if quick else None
 
     def _publish(self, job: concurrent.futures.Future, pub: zmq.Socket, now: float) -> None:
         try:
             estimated = job.result()
         except Exception as e:  # noqa: BLE001 - a failed estimate is logged; the calibrator goes on
             log.warning("calibration failed: %s", e)
+            self.full_of = None
             return
         valid_from = time.time_ns()
         self.latest = message(self.source, len(self.published), estimated, valid_from)
@@ -157,6 +165,9 @@ class LiveCalibrator:
         record = {"sequence": self.latest.sequence, "valid_from_ns": valid_from,
                   "score_deg": self.job_score if np.isfinite(self.job_score) else None, **estimated.report}
         calibrate.write_session(self.out, self.session, estimated, record)
+        with open(self.out / HISTORY, "a") as f:  # one line per calibration published
+            f.write(json.dumps({k: record[k] for k in ("sequence", "valid_from_ns", "score_deg")} |
+                               {"quick": record["window"]["quick"], "frames": record["frames"]}) + "\n")
         pub.send_multipart(wire.encode(self.latest))
         self.last_sent = now
         self.published.append(record)

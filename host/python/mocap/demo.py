@@ -33,7 +33,9 @@ def calibration_line(studio: live.Studio, result: dict) -> str:
                 "enough, estimated from the live streams (details in `session/calibrated/calibration.json`): "
                 + ("never, in this take." if when is None else
                    f"solved with the IMUs from {when:.1f} s of the take on"
-                   + ("" if after is None else f", joint centres {after:.2f} cm from then") + "."))
+                   + ("" if after is None else f", joint centres {after:.2f} cm from then") + ". Published: "
+                   + ", ".join(f"{'quick' if c['quick'] else 'full'} at {c['take_s']:.1f} s"
+                               for c in result.get("calibrations", [])) + "."))
     return ("Calibration: estimated by the host from the take's first 5 s with motion (skeleton, IMU mountings, "
             "headings and positions; `docs/calibration.md`, details in `session/calibration.json`): nothing of the "
             "truth.")

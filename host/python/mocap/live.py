@@ -244,6 +244,10 @@ def score(studio: Studio, run: Run) -> dict:
                                                                   for p in poses]))
         e = evaluation.transform_errors(studio.skeleton, studio.truth[matched], positions, orientations, dt)
         out.update({k: e[k] for k in keys})
+        history = studio.calibrated / "calibrations.jsonl"
+        if history.is_file():  # the live calibrator's, at take times
+            out["calibrations"] = [{**c, "take_s": (c["valid_from_ns"] - run.start_ns) * 1e-9}
+                                   for c in map(json.loads, history.read_text().splitlines())]
         with_imus = np.array([len(p.imus) > 0 for p in poses])
         if studio.calibration == "live" and with_imus.any():  # from the first calibration on
             first = int(np.argmax(with_imus))

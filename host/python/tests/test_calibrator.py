@@ -1,6 +1,8 @@
 """The live calibrator's policy and buffer (mocap.calibrator): when it calibrates and what it
 keeps. Its run beside mocapd is tested end to end in tests/test_live.py."""
 
+import json
+
 import numpy as np
 
 from mocap import calibrator
@@ -54,19 +56,21 @@ class Immediate:
     """An executor that runs the job at once (or fails it)."""
 
     def __init__(self, fail: bool = False):
-        self.fail, self.calls = fail, 0
+        self.fail, self.calls, self.quick = fail, 0, []
 
     def submit(self, fn, *args):
         import concurrent.futures
 
         self.calls += 1
+        self.quick.append(args[-1])
         f = concurrent.futures.Future()
         if self.fail:
             f.set_exception(ValueError("calibration: the window solve failed"))
         else:
             from mocap import calibrate
 
-            f.set_result(calibrate.Estimated('{"skeleton": 1}', '{"imus": []}', '{"layout": 1}', {"frames": 3}))
+            f.set_result(calibrate.Estimated('{"skeleton": 1}', '{"imus": []}', '{"layout": 1}',
+                                             {"frames": 3, "window": {"quick": args[-1]}}))
         return f
 
 
@@ -106,10 +110,13 @@ def test_the_calibrator_publishes_when_due_repeats_and_survives_a_failed_estimat
         if fail:  # logged, nothing published, the calibrator goes on
             assert pub.sent == [] and c.published == []
             continue
-        assert len(c.published) == 1 and pool.calls == 1
-        first = wire.decode(pub.sent[0])
-        assert isinstance(first, wire.Calibration) and first.sequence == 0 and first.skeleton_json == '{"skeleton": 1}'
+        # The first quick, the same seconds in full at once after it.
+        assert len(c.published) == 2 and pool.quick == [True, False]
+        first = wire.decode(pub.sent[-1])
+        assert isinstance(first, wire.Calibration) and first.sequence == 1 and first.skeleton_json == '{"skeleton": 1}'
         now[0] += calibrator.REPEAT_S + 0.1
         c.step(pool, pub)
         assert len(pub.sent) >= 2 and wire.decode(pub.sent[-1]) == first  # repeated for late joiners
         assert (tmp_path / "outFalse" / "calibration.json").is_file()
+        history = [json.loads(line) for line in (tmp_path / "outFalse" / calibrator.HISTORY).read_text().splitlines()]
+        assert [(h["sequence"], h["quick"]) for h in history] == [(0, True), (1, False)]

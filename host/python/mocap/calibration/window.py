@@ -219,21 +219,23 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
 def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
              readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
              site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True,
-             first_frame: int = 0) -> Calibration:
+             first_frame: int = 0, quick: bool = False) -> Calibration:
     """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings,
     over the `seconds` from first_frame on; the keypoint sites are estimated (step 4b) along
     the directions known within site_std (m; 0: the layout's sites kept) when there are IMUs to
-    pin the bones' orientations."""
+    pin the bones' orientations. quick: one window solve (no accelerometer headings, no sites),
+    about half the time: a first calibration for a live session, while the full one runs."""
     if first_frame:
         f = first_frame
         tail = None if readings is None else dataclasses.replace(
             readings, quaternions=readings.quaternions[f:],
             accelerations=None if readings.accelerations is None else readings.accelerations[f:])
-        c = estimate(rig, detections[f:], times[f:], layout_name, tail, seconds, step, site_std, use_held_pose)
+        c = estimate(rig, detections[f:], times[f:], layout_name, tail, seconds, step, site_std, use_held_pose,
+                     quick=quick)
         c.window_frames = c.window_frames + f
         c.report["window_start_s"] = float(times[f] - times[0])
         return c
-    estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0
+    estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0 and not quick
     window = int(np.searchsorted(times, times[0] + seconds))
     window = max(window, 1)
     start = skeleton_estimate.estimate(rig, detections[:window], layout_name)
@@ -281,7 +283,8 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     dense = len(used) * step >= DENSE * window
     try:
         result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
-        accelerometer = _accelerometer_headings(result, rig, detections[:window], times[:window], readings, dense)
+        accelerometer = _accelerometer_headings(result, rig, detections[:window], times[:window],
+                                                None if quick else readings, dense)
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
             options.heading_priors = [np.array(accelerometer[s.name]) for s in sites]
             result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
@@ -291,6 +294,7 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
         raise InputError(f"calibration: {e}") from None
     report = {
         "window_start_s": 0.0, "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
+        "quick": quick,
         "iterations": result.iterations, "converged": result.converged,
         "cost": {"start": result.initial_cost, "end": result.final_cost},
         "scales_start": start.scales,  # step 1, of the default skeleton's groups
