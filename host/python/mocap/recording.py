@@ -41,7 +41,7 @@ from mocap.errors import InputError
 
 log = logging.getLogger(__name__)
 
-INPUT_TOPICS = ("/camera/*", "/imu/*")  # what `replay` sends by default: the host's inputs
+INPUT_TOPICS = ("/camera/*", "/imu/*", "/calibration/*")  # what `replay` sends by default: the host's inputs
 POLL_MS = 100  # how often `record` checks its stop conditions
 BACKPRESSURE_SLEEP_S = 0.001  # `replay`'s pause while a subscriber's queue is full
 REPLAY_LINGER_MS = 10_000  # time the last queued messages get to reach slow subscribers
@@ -267,6 +267,8 @@ def _shifted(m: RecordedMessage, offset_ns: int) -> bytes:
         message.send_time_ns += offset_ns if message.send_time_ns else 0
         for sample in message.samples:
             sample.sample_time_ns += offset_ns
+    elif isinstance(message, wire.Calibration):  # from the same moment of the take
+        message.valid_from_ns += offset_ns
     return message.SerializeToString()  # closing the socket then waits (LINGER) for the queued messages to leave
 
 

@@ -144,8 +144,8 @@ def free_tcp_endpoint() -> str:
 
 
 @pytest.mark.parametrize("speed, topics, kept", [
-    (None, None, ("/camera/", "/imu/")),  # the default: the host's inputs, as fast as possible
-    (50.0, None, ("/camera/", "/imu/")),  # following the 1 ms log-time gaps at 50x
+    (None, None, ("/camera/", "/imu/", "/calibration/")),  # the default: the host's inputs, as fast as possible
+    (50.0, None, ("/camera/", "/imu/", "/calibration/")),  # following the 1 ms log-time gaps at 50x
     (None, ["/pose", "/health/*"], ("/pose", "/health/")),
 ])
 def test_replay_sends_the_chosen_topics_in_order(recorded, speed, topics, kept):
@@ -163,6 +163,24 @@ def test_replay_sends_the_chosen_topics_in_order(recorded, speed, topics, kept):
             thread.join()
     assert got == expected  # the skipped topics lie between these in log time: none was sent
     assert results == [len(expected)]
+
+
+def test_restamping_moves_every_input_time_the_host_reads(recorded):
+    """`replay --restamp`: capture, sample, send times and a calibration's valid_from move
+    by the same offset, so a live host applies a recorded calibration where it was applied."""
+    path, *_ = recorded
+    offset = 10**12
+    for m in recording.read(path):
+        if not m.topic.startswith(("/camera/", "/imu/", "/calibration/")):
+            continue
+        before, after = wire.TYPES[m.type_name].FromString(m.payload), wire.TYPES[m.type_name].FromString(
+            recording._shifted(m, offset))
+        if isinstance(before, wire.KeypointFrame):
+            assert after.capture_time_ns - before.capture_time_ns == offset
+        elif isinstance(before, wire.ImuBatch):
+            assert [b.sample_time_ns + offset for b in before.samples] == [a.sample_time_ns for a in after.samples]
+        else:
+            assert after.valid_from_ns - before.valid_from_ns == offset and after.skeleton_json == before.skeleton_json
 
 
 def test_cli_replay_of_a_file_that_is_not_mcap_is_an_error(tmp_path, capsys):
