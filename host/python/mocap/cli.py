@@ -399,7 +399,7 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--restamp", action="store_true", help="move the recorded times to now, so that a live host "
                      "(mocapd) takes the replay for a take happening now")
     rep.add_argument("--topics", nargs="+", default=None, metavar="PATTERN",
-                     help="topic patterns to send (default: the inputs, /camera/* /imu/*)")
+                     help="topic patterns to send (default: the inputs, /camera/* /imu/* /calibration/*)")
     rep.set_defaults(func=_replay)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
