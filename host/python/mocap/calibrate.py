@@ -187,9 +187,9 @@ def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: floa
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),
                      {"frames": len(frame_times), "first_frame_time_ns": int(t0),
-                           "window_motion_score_deg": score, "imus_calibrated": [s[0] for s in sensors],
-                           "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
-                           "window": cal.report})
+                      "window_motion_score_deg": score, "imus_calibrated": [s[0] for s in sensors],
+                      "imus_missing": [s.name for s in imu_set if s.name not in {x[0] for x in sensors}],
+                      "window": cal.report})
 
 
 def write_session(out: Path, session: Path, estimated: Estimated, report: dict) -> None:

@@ -141,9 +141,7 @@ def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
     det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
     readings = window.ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions,
                                   t.accelerations)
-    start, _, why_not = informative.calibration_window(det, t.times, readings, options.get("seconds", window.SECONDS))
-    return window.estimate(t.rig, det, t.times, t.layout.name, None if why_not else readings,
-                           **{"first_frame": start, **options})
+    return informative.estimate(t.rig, det, t.times, t.layout.name, readings, **options)[0]
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),

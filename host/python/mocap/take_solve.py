@@ -66,10 +66,9 @@ def solve_take(folder: Path, out: Path) -> dict:
     bones = _core.Skeleton.load(str(paths.DEFAULT_SKELETON)).bone_names
     readings = window.readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
                                           for m in take.imus]) if take.imus else None
-    first, score, why_not = informative.calibration_window(det, times, readings, window.SECONDS)
+    cal, score, why_not = informative.estimate(take.rig, det, times, take.layout, readings)
     if why_not:
         readings = None
-    cal = window.estimate(take.rig, det, times, take.layout, readings, first_frame=first)
     solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
     thetas, statuses = window.solve_frames(solver, det, times, readings)
     out.mkdir(parents=True, exist_ok=True)
@@ -79,7 +78,8 @@ def solve_take(folder: Path, out: Path) -> dict:
     report = {"frames": take.n_frames, "frame_rate": take.frame_rate, "cameras": len(take.rig.cameras),
               "layout": take.layout, "imus_used": len(cal.imus), "imus_not_used_because": why_not,
               "window_motion_score_deg": score,
-              "skeleton": {"from_frames": int(np.searchsorted(times, times[first] + window.SECONDS) - first),
+              "skeleton": {"from_frames": int(np.diff(np.searchsorted(times, times[0] + cal.report["window_start_s"]
+                                                                      + np.array([0.0, window.SECONDS])))[0]),
                            "scales": start.scales,
                            "lengths_m": start.lengths_m, "frames_per_length": start.frames},
               "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)},

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from mocap import rotations
-from mocap.calibration.window import ImuReadings
+from mocap.calibration.window import SECONDS, Calibration, ImuReadings
+from mocap.calibration.window import estimate as window_estimate
 
 MIN_SCORE_DEG = 3.0  # below: too still to calibrate the IMUs from
 # At or above: enough motion; the first such window is kept (a calibration pose held at the
@@ -84,3 +85,13 @@ def calibration_window(detections: np.ndarray, times: np.ndarray, readings: ImuR
                           f"too still to calibrate their headings and mountings from (at least "
                           f"{MIN_SCORE_DEG:g} deg); solved from video alone")
     return start, score, None
+
+
+def estimate(rig, detections: np.ndarray, times: np.ndarray, layout_name: str, readings: ImuReadings | None,
+             **options) -> tuple[Calibration, float | None, str | None]:
+    """window.estimate (with its keyword options) over the window calibration_window chooses,
+    the IMUs left out when they are too still: (calibration, motion score, why they were)."""
+    first, score, why_not = calibration_window(detections, times, readings, options.get("seconds", SECONDS))
+    cal = window_estimate(rig, detections, times, layout_name, None if why_not else readings,
+                          **{"first_frame": first, **options})
+    return cal, score, why_not
