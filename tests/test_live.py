@@ -274,9 +274,11 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert start < 42.0 and (with_imus[t < start - 0.1] == 0).all() and (with_imus[t > start + 0.1] == 13).all()
     assert result["calibrated"]["joint_centres_pos_cm"] < 3.0, result["calibrated"]
     report = json.loads((studio.calibrated / "calibration.json").read_text())
-    # From seconds that moved (the still start alone would not do: informative.MIN_SCORE_DEG).
-    assert report["window_motion_score_deg"] >= informative.GOOD_SCORE_DEG, report
     published = result["calibrations"]  # quick first, the same seconds in full after it
+    # From the seconds whose motion set it off (the still start alone would not do:
+    # informative.MIN_SCORE_DEG), scored again at the cameras' frames.
+    assert published[0]["score_deg"] >= informative.GOOD_SCORE_DEG, published[0]
+    assert report["window_motion_score_deg"] >= 0.9 * report["score_deg"], report
     assert published[0]["quick"] and abs(published[0]["take_s"] - start) < 0.5, published
     assert all(not c["quick"] for c in published[1:])
     calibration = [s for s in run.healths[-1].streams if s.stream == "calibration"]

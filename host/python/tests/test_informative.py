@@ -45,6 +45,16 @@ def test_a_still_start_is_passed_over_and_a_moving_first_window_kept():
     assert t[informative.choose_window(t, readings(moving), seen, 5.0)[0]] == 3.0
 
 
+def test_the_window_ending_at_the_last_frame_is_a_candidate():
+    """The live calibrator's buffer spans a little less than a whole step past the window (6 s
+    at 60 Hz ends at 5.983 s): the seconds that triggered it, ending at the last frame, are
+    still among the windows, not only the one starting at the first frame."""
+    t = np.arange(int(6 * RATE)) / RATE
+    moving = np.where(t >= 1.8, 25.0 * np.sin(2 * np.pi * 0.8 * t), 0.0)  # still for 1.8 s, then moves
+    start, score = informative.choose_window(t, readings(moving), np.ones(len(t), bool), 5.0)
+    assert abs(t[start] - (t[-1] - 5.0)) < 1.5 / RATE and score >= informative.GOOD_SCORE_DEG, (t[start], score)
+
+
 def test_imus_that_never_move_are_left_out_with_a_reason():
     t = np.arange(int(8 * RATE)) / RATE
     q = readings(0.5 * np.sin(2 * np.pi * t))  # 0.35 deg: standing still, breathing

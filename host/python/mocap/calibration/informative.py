@@ -52,11 +52,16 @@ def window_score(quaternions: np.ndarray) -> float:
 def choose_window(times: np.ndarray, quaternions: np.ndarray, seen: np.ndarray, seconds: float,
                   step_s: float = 1.0) -> tuple[int, float]:
     """(first frame, score) of the window of `seconds` to calibrate from, among those starting
-    every step_s with at least MIN_SEEN of their frames seen (seen: (F,) bool, the frames seen
-    by two cameras or more): the first that scores GOOD_SCORE_DEG or more, else the
-    highest-scoring; the take's first window when none qualifies."""
+    every step_s and the one ending at the last frame, with at least MIN_SEEN of their frames
+    seen (seen: (F,) bool, the frames seen by two cameras or more): the first that scores
+    GOOD_SCORE_DEG or more, else the highest-scoring; the take's first window when none
+    qualifies."""
     best = (0, float("-inf"))
-    for t0 in np.arange(times[0], max(times[0], times[-1] - seconds) + 1e-9, step_s):
+    last = max(times[0], times[-1] - seconds)
+    starts = np.arange(times[0], last + 1e-9, step_s)
+    if last - starts[-1] > 1e-3:  # the live calibrator's latest seconds, whatever the buffer's span
+        starts = np.append(starts, last)
+    for t0 in starts:
         lo, hi = np.searchsorted(times, [t0, t0 + seconds])
         if hi - lo < 2 or seen[lo:hi].mean() < MIN_SEEN:
             continue
