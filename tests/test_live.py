@@ -275,10 +275,12 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert result["calibrated"]["joint_centres_pos_cm"] < 3.0, result["calibrated"]
     report = json.loads((studio.calibrated / "calibration.json").read_text())
     published = result["calibrations"]  # quick first, the same seconds in full after it
-    # From the seconds whose motion set it off (the still start alone would not do:
-    # informative.MIN_SCORE_DEG), scored again at the cameras' frames.
+    # Set off by the last seconds' motion (the still start alone would not do:
+    # informative.MIN_SCORE_DEG); calibrated from the buffer's first seconds that moved enough,
+    # or failing that its best, which the seconds that set it off are among (measured 17.4-19.0
+    # deg, set off at 19.0-19.1).
     assert published[0]["score_deg"] >= informative.GOOD_SCORE_DEG, published[0]
-    assert report["window_motion_score_deg"] >= 0.9 * report["score_deg"], report
+    assert report["window_motion_score_deg"] >= min(informative.GOOD_SCORE_DEG, 0.9 * report["score_deg"]), report
     assert published[0]["quick"] and abs(published[0]["take_s"] - start) < 0.5, published
     assert all(not c["quick"] for c in published[1:])
     calibration = [s for s in run.healths[-1].streams if s.stream == "calibration"]

@@ -55,6 +55,19 @@ def test_the_window_ending_at_the_last_frame_is_a_candidate():
     assert abs(t[start] - (t[-1] - 5.0)) < 1.5 / RATE and score >= informative.GOOD_SCORE_DEG, (t[start], score)
 
 
+def test_a_detector_on_some_frames_only_still_has_its_still_start_passed_over():
+    """HS: the detector runs on 2 of every 8 frames; a window is seen enough when the frames it
+    ran on are, not a quarter of all frames (every window would fail, and the still first
+    one be kept)."""
+    t = np.arange(int(12 * RATE)) / RATE
+    moving = np.where(t >= 6.0, 25.0 * np.sin(2 * np.pi * 0.8 * t), 0.0)
+    detected = np.arange(len(t)) % 8 < 2
+    start, score = informative.choose_window(t, readings(moving), detected.copy(), 5.0, detected=detected)
+    assert t[start] >= 4.0 and score >= informative.GOOD_SCORE_DEG, (t[start], score)
+    seen = detected & (t < 6.0)  # out of view after 6 s: seen on too few of the frames detected
+    assert t[informative.choose_window(t, readings(moving), seen, 5.0, detected=detected)[0]] == 3.0
+
+
 def test_imus_that_never_move_are_left_out_with_a_reason():
     t = np.arange(int(8 * RATE)) / RATE
     q = readings(0.5 * np.sin(2 * np.pi * t))  # 0.35 deg: standing still, breathing

@@ -50,12 +50,13 @@ def window_score(quaternions: np.ndarray) -> float:
 
 
 def choose_window(times: np.ndarray, quaternions: np.ndarray, seen: np.ndarray, seconds: float,
-                  step_s: float = 1.0) -> tuple[int, float]:
+                  step_s: float = 1.0, detected: np.ndarray | None = None) -> tuple[int, float]:
     """(first frame, score) of the window of `seconds` to calibrate from, among those starting
-    every step_s and the one ending at the last frame, with at least MIN_SEEN of their frames
-    seen (seen: (F,) bool, the frames seen by two cameras or more): the first that scores
-    GOOD_SCORE_DEG or more, else the highest-scoring; the take's first window when none
-    qualifies."""
+    every step_s and the one ending at the last frame, with at least MIN_SEEN of their detected
+    frames seen (seen: (F,) bool, the frames seen by two cameras or more; detected: (F,) bool,
+    the frames the detector ran on, default all): the first that scores GOOD_SCORE_DEG or
+    more, else the highest-scoring; the take's first window when none qualifies."""
+    detected = np.ones(len(times), bool) if detected is None else detected
     best = (0, float("-inf"))
     last = max(times[0], times[-1] - seconds)
     starts = np.arange(times[0], last + 1e-9, step_s)
@@ -63,7 +64,7 @@ def choose_window(times: np.ndarray, quaternions: np.ndarray, seen: np.ndarray, 
         starts = np.append(starts, last)
     for t0 in starts:
         lo, hi = np.searchsorted(times, [t0, t0 + seconds])
-        if hi - lo < 2 or seen[lo:hi].mean() < MIN_SEEN:
+        if hi - lo < 2 or not detected[lo:hi].any() or seen[lo:hi].sum() < MIN_SEEN * detected[lo:hi].sum():
             continue
         score = window_score(quaternions[lo:hi])
         if np.isfinite(score) and score >= GOOD_SCORE_DEG:
@@ -77,14 +78,14 @@ def choose_window(times: np.ndarray, quaternions: np.ndarray, seen: np.ndarray, 
 
 
 def calibration_window(detections: np.ndarray, times: np.ndarray, readings: ImuReadings | None,
-                       seconds: float) -> tuple[int, float | None, str | None]:
+                       seconds: float, detected: np.ndarray | None = None) -> tuple[int, float | None, str | None]:
     """(first frame, motion score, why the IMUs cannot be used or None) of the window to
-    calibrate from, for detections (F, C, K, 3) at times (F,): with IMUs, choose_window's;
-    without, the first seconds."""
+    calibrate from, for detections (F, C, K, 3) at times (F,) (detected: choose_window's):
+    with IMUs, choose_window's; without, the first seconds."""
     if readings is None:
         return 0, None, None
     seen = (detections[..., 2] > 0).any(axis=2).sum(axis=1) >= 2
-    start, score = choose_window(times, readings.quaternions, seen, seconds)
+    start, score = choose_window(times, readings.quaternions, seen, seconds, detected=detected)
     if not np.isfinite(score) or score < MIN_SCORE_DEG:
         return 0, score, (f"the IMUs tilt by {score:.1f} deg (RMS) at most in any {seconds:g} s of the take: "
                           f"too still to calibrate their headings and mountings from (at least "
@@ -93,10 +94,11 @@ def calibration_window(detections: np.ndarray, times: np.ndarray, readings: ImuR
 
 
 def estimate(rig, detections: np.ndarray, times: np.ndarray, layout_name: str, readings: ImuReadings | None,
-             **options) -> tuple[Calibration, float | None, str | None]:
-    """window.estimate (with its keyword options) over the window calibration_window chooses,
-    the IMUs left out when they are too still: (calibration, motion score, why they were)."""
-    first, score, why_not = calibration_window(detections, times, readings, options.get("seconds", SECONDS))
+             detected: np.ndarray | None = None, **options) -> tuple[Calibration, float | None, str | None]:
+    """window.estimate (with its keyword options) over the window calibration_window chooses
+    (detected: choose_window's), the IMUs left out when they are too still: (calibration,
+    motion score, why they were)."""
+    first, score, why_not = calibration_window(detections, times, readings, options.get("seconds", SECONDS), detected)
     cal = window_estimate(rig, detections, times, layout_name, None if why_not else readings,
                           **{"first_frame": first, **options})
     return cal, score, why_not
