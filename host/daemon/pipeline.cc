@@ -314,8 +314,9 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   v1::Health h;
   h.set_source("host");
   h.set_time_ns(now_ns);
+  // repeats_drop: a duplicate is a lost message (not for calibrations: repeated by design).
   const auto add = [&](const std::string& name, bool active, StreamStats& st,
-                       const StreamCounts* counts) {
+                       const StreamCounts* counts, bool repeats_drop = true) {
     v1::StreamHealth* s = h.add_streams();
     s->set_stream(name);
     s->set_active(active);
@@ -329,7 +330,7 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
       s->set_duplicates(counts->duplicates);
     }
     s->set_malformed(st.invalid);
-    s->set_dropped(s->late() + s->duplicates() + s->malformed());
+    s->set_dropped(s->late() + (repeats_drop ? s->duplicates() : 0) + s->malformed());
     st.received_in_period = 0;
     st.latency_ms.clear();
   };
@@ -346,7 +347,8 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   for (auto& [hub, stats] : hub_stats_)
     add("hub/" + hub, stats.received_in_period > 0, stats, nullptr);
   // Calibrations: received in the period (rate), applied since start (received), repeats of
-  // one taken (duplicates), rejected (malformed); active while any IMU is solved with;
+  // one taken (duplicates: the calibrator repeats the latest for hosts that start later, so
+  // not dropped), rejected (malformed = dropped); active while any IMU is solved with;
   // latency = arrival - valid_from.
   calibration_stats_.invalid = calibrations_rejected_;
   StreamCounts applied;
@@ -354,7 +356,7 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   applied.duplicates = calibrations_repeated_;
   add("calibration",
       std::find(imu_calibrated_.begin(), imu_calibrated_.end(), true) != imu_calibrated_.end(),
-      calibration_stats_, &applied);
+      calibration_stats_, &applied, /*repeats_drop=*/false);
   uint64_t malformed = 0;
   for (const auto& [reason, n] : dropped_) malformed += reason == "late_or_duplicate" ? 0 : n;
   StreamStats input;

@@ -269,6 +269,7 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
   EXPECT_EQ(it->received(), 2u);
   EXPECT_EQ(it->duplicates(), 1u);
   EXPECT_EQ(it->malformed(), 3u);
+  EXPECT_EQ(it->dropped(), 3u);  // the rejected ones; a repeat loses nothing
   EXPECT_TRUE(it->active());
 }
 
