@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+from concurrent.futures.process import BrokenProcessPool
 import dataclasses
 import json
 import logging
@@ -97,6 +98,30 @@ def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float, q
 
 def _low_priority() -> None:
     os.nice(10)
+
+
+class WorkerPool:
+    """The calibrator's worker: one low-priority process, replaced when it died (killed, out
+    of memory): the job it ran fails (logged), the next one runs in a new process."""
+
+    def __init__(self, start=lambda: concurrent.futures.ProcessPoolExecutor(1, initializer=_low_priority)):
+        self.start = start
+        self.pool = start()
+
+    def submit(self, fn, *args) -> concurrent.futures.Future:
+        try:
+            return self.pool.submit(fn, *args)
+        except BrokenProcessPool:
+            log.warning("the calibration worker process died; starting another")
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            self.pool = self.start()
+            return self.pool.submit(fn, *args)
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *_) -> None:
+        self.pool.shutdown(wait=True, cancel_futures=True)
 
 
 def message(source: str, sequence: int, estimated: calibrate.Estimated, valid_from_ns: int) -> wire.Calibration:
@@ -184,7 +209,7 @@ def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds
     calibrator = LiveCalibrator(Path(session).resolve(), Path(out), seconds, policy, source)
     deadline = None if duration_s is None else time.monotonic() + duration_s
     context = zmq.Context.instance()
-    with concurrent.futures.ProcessPoolExecutor(1, initializer=_low_priority) as pool, \
+    with WorkerPool() as pool, \
             transport.subscriber(context, endpoints) as sub, transport.publisher(context, publish) as pub:
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             if sub.poll(100):

@@ -2,8 +2,10 @@
 keeps. Its run beside mocapd is tested end to end in tests/test_live.py."""
 
 import json
+import os
 
 import numpy as np
+import pytest
 
 from mocap import calibrator
 from mocap.calibration import informative
@@ -120,3 +122,13 @@ def test_the_calibrator_publishes_when_due_repeats_and_survives_a_failed_estimat
         assert (tmp_path / "outFalse" / "calibration.json").is_file()
         history = [json.loads(line) for line in (tmp_path / "outFalse" / calibrator.HISTORY).read_text().splitlines()]
         assert [(h["sequence"], h["quick"]) for h in history] == [(0, True), (1, False)]
+
+
+def test_a_worker_that_died_is_replaced():
+    """Killed or out of memory: its job fails, the next runs in a new worker process."""
+    import concurrent.futures
+
+    with calibrator.WorkerPool() as pool:
+        with pytest.raises(concurrent.futures.process.BrokenProcessPool):
+            pool.submit(os._exit, 1).result(timeout=30)
+        assert pool.submit(pow, 2, 10).result(timeout=30) == 1024
