@@ -16,9 +16,10 @@ When (the Policy):
   follows).
 
 Each calibration is computed in a worker process at low priority (about 12 s on two cores;
-mocapd keeps its latency; a worker that died is replaced), written to DIR as a session (so a restarted mocapd starts with
-the latest; DIR/calibrations.jsonl lists every one), and published; the latest is published again every REPEAT_S for hosts that
-connect later (mocapd takes a sequence once). The first is quick (window.estimate's quick:
+mocapd keeps its latency; a worker that died is replaced), written to DIR as a session (so a
+restarted mocapd starts with the latest; DIR/calibrations.jsonl lists every one), and
+published; the latest is published again every REPEAT_S for hosts that connect later
+(mocapd takes a sequence once). The first is quick (window.estimate's quick:
 one window solve, about half the time) and the same seconds in full follow it at once.
 """
 
