@@ -127,11 +127,17 @@ class MotionWatch:
                 self.samples[s.sensor_id].append((s.sample_time_ns, [s.qw, s.qx, s.qy, s.qz]))
 
     def score(self) -> float:
-        """NaN when no IMU sent anything."""
+        """NaN when no IMU sent anything in the last `seconds` (of the newest sample's clock: a
+        sensor that stopped sending drops out)."""
+        if not self.samples:
+            return float("nan")
+        since = max(rows[-1][0] for rows in self.samples.values()) - self.seconds * 1e9
         spreads = []
-        for name, rows in self.samples.items():
-            newest = rows[-1][0]
-            self.samples[name] = rows = [r for r in rows if r[0] >= newest - self.seconds * 1e9]
+        for name in list(self.samples):
+            rows = self.samples[name] = [r for r in self.samples[name] if r[0] >= since]
+            if not rows:
+                del self.samples[name]
+                continue
             q = np.array([r[1] for r in rows], dtype=float)
             q /= np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-12)
             spreads.append(informative.tilt_spread_deg(q[:, None])[0])

@@ -101,3 +101,10 @@ def test_the_live_watch_scores_the_last_seconds_of_samples():
         watch.add(batch)
         scores[round(t[k + 9])] = watch.score()
     assert scores[5] < 0.5 and scores[12] > informative.GOOD_SCORE_DEG, scores
+    # A sensor that stopped sending (its last seconds long gone) no longer counts.
+    stopped = wire.ImuBatch(hub_id="hub0", sequence=999)
+    for k in range(20):
+        s = stopped.samples.add(sensor_id="c", sample_time_ns=int(k * 1e7))
+        s.qw, s.qx, s.qy, s.qz = q[0, 0]
+    watch.add(stopped)  # still for 0.2 s at the start of the take
+    assert abs(watch.score() - scores[12]) < 1e-9 and "c" not in watch.samples
