@@ -60,7 +60,7 @@ def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.
     readings = window.readings_at(times, [(name, bone, imu_times, streams.imu_quaternions[:, i],
                                            streams.imu_accelerations[:, i])
                                           for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
-    return informative.estimate(rig, keypoints, times, streams.layout, readings)[0]
+    return informative.estimate(rig, keypoints, times, streams.layout, readings, detected=streams.detected)[0]
 
 
 def free_ports(n: int) -> list[int]:
