@@ -358,7 +358,8 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
       std::find(imu_calibrated_.begin(), imu_calibrated_.end(), true) != imu_calibrated_.end(),
       calibration_stats_, &applied, /*repeats_drop=*/false);
   uint64_t malformed = 0;
-  for (const auto& [reason, n] : dropped_) malformed += reason == "late_or_duplicate" ? 0 : n;
+  for (const auto& [reason, n] : dropped_)  // those two are counted by their streams above
+    malformed += reason == "late_or_duplicate" || reason == "invalid_calibration" ? 0 : n;
   StreamStats input;
   input.invalid = malformed;
   add("input", true, input, nullptr);  // every message dropped before reaching a stream

@@ -271,6 +271,10 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
   EXPECT_EQ(it->malformed(), 3u);
   EXPECT_EQ(it->dropped(), 3u);  // the rejected ones; a repeat loses nothing
   EXPECT_TRUE(it->active());
+  const auto input = std::find_if(health.streams().begin(), health.streams().end(),
+                                  [](const v1::StreamHealth& s) { return s.stream() == "input"; });
+  ASSERT_NE(input, health.streams().end());
+  EXPECT_EQ(input->malformed(), 1u);  // the empty one; the rejected calibrations are counted above
 }
 
 TEST(Pipeline, ASessionFileThatIsWrongSaysWhat) {
