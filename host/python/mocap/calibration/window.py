@@ -358,9 +358,9 @@ def _accelerometer_headings(result, rig, detections, times, readings: ImuReading
     orientations leave free when a segment barely tilts in the window (heading and mounting
     trade there); step 4 is solved again with these as priors."""
     imus = list(result.imus)
-    none = {s.name: (0.0, float("inf")) for s in imus}
+    headings = {s.name: (0.0, float("inf")) for s in imus}  # none, until found
     if not imus or readings is None or readings.accelerations is None or not dense:
-        return none
+        return headings
     for s in imus:
         s.offset = imu_position.usual_place(result.skeleton, s.bone)
     thetas = _window_motion(result.skeleton, rig, result.layout, imus, detections, times, readings)
@@ -368,8 +368,8 @@ def _accelerometer_headings(result, rig, detections, times, readings: ImuReading
         placed = imu_position.estimate(result.skeleton, s, thetas, times, readings.quaternions[: len(times), i],
                                        readings.accelerations[: len(times), i], heading_search=True)
         if placed.frames > 0:
-            none[s.name] = (placed.heading_rad, placed.heading_sigma_rad)
-    return none
+            headings[s.name] = (placed.heading_rad, placed.heading_sigma_rad)
+    return headings
 
 
 def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuReadings | None,
