@@ -9,6 +9,7 @@ DEBIAN_PACKAGES=(
   libceres-dev libeigen3-dev nlohmann-json3-dev pybind11-dev libgtest-dev
   protobuf-compiler libprotobuf-dev libzmq3-dev cppzmq-dev
   python3 python3-dev python3-venv
+  gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm libcmocka-dev
 )
 
 missing=()
