@@ -243,6 +243,26 @@ def _imu_stats(args: argparse.Namespace) -> int:
     return 0
 
 
+def _imu_filter(args: argparse.Namespace) -> int:
+    from mocap.imu_node import filter as node_filter
+
+    print(json.dumps(node_filter.filter_csv(args.input, args.out, use_mag=not args.no_mag)), flush=True)
+    return 0
+
+
+def _eval_imu_filter(args: argparse.Namespace) -> int:
+    from mocap.imu_node import broad
+
+    rows = broad.evaluate(broad.load(args.trials), args.methods)
+    if args.markdown:
+        print(broad.markdown(rows), end="", flush=True)
+        return 0
+    sets = {"held-out": broad.HELD_OUT, "tuning": broad.TUNING, "all": tuple(rows)}
+    print(json.dumps({"trials": rows, "summary": {name: broad.summarise(rows, numbers) for name, numbers in sets.items()}},
+                     indent=1), flush=True)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap", description="Real-time motion capture from video and IMUs.")
     p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
@@ -401,6 +421,24 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("--topics", nargs="+", default=None, metavar="PATTERN",
                      help="topic patterns to send (default: the inputs, /camera/* /imu/* /calibration/*)")
     rep.set_defaults(func=_replay)
+
+    imf = sub.add_parser("imu-filter", help="run the IMU node's orientation filter (the firmware's C) on a recording: "
+                         "IN.csv t,gx,gy,gz (rad/s),ax,ay,az (m/s^2),mx,my,mz (uT), sensor frame -> OUT.csv "
+                         "t,qw,qx,qy,qz (sensor -> ENU)")
+    imf.add_argument("--in", dest="input", required=True, metavar="IN.csv", help="recording, header row first; the "
+                     "sample period is the median dt (each dt within 5 %% of it); a NaN value skips that vector")
+    imf.add_argument("--out", required=True, metavar="OUT.csv", help="orientations to write, one row per input row")
+    imf.add_argument("--no-mag", action="store_true", help="6D: ignore the magnetometer (heading from the gyroscope)")
+    imf.set_defaults(func=_imu_filter)
+
+    eif = sub.add_parser("eval-imu-filter", help="the node's filter (9D, 6D), VQF and Fusion on the BROAD benchmark "
+                         "(../shared/data/imu/broad): RMSE in degrees (docs/firmware_filter.md)")
+    eif.add_argument("--trials", nargs="+", default=None, metavar="NN",
+                     help="trial numbers, e.g. 02 03 (default all 18; tuning: 01 04 06 08 10 24 26 28)")
+    eif.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
+                     help="a subset of: 'ours 9D' 'ours 6D' 'VQF 9D' 'VQF 6D' 'Fusion 9D' (default all)")
+    eif.add_argument("--markdown", action="store_true", help="print the tables (held-out, all, per trial) as Markdown")
+    eif.set_defaults(func=_eval_imu_filter)
 
     r = sub.add_parser("rig", help="write a rig file from a Pose2Sim/anipose Calib.toml")
     r.add_argument("--from-calib-toml", required=True, help="Calib.toml to read")
