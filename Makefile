@@ -27,4 +27,4 @@ clean:
 
 lint:             ## formatting of the C++ code, static checks of the Python code
 	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')
-	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests
+	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests firmware

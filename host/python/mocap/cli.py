@@ -27,6 +27,10 @@ def _bench(args: argparse.Namespace) -> int:
             print(json.dumps(evaluation.bench(fetch_trial())), flush=True)
         except DataMissingError as e:
             print(json.dumps({"bench": "edge", "skipped": str(e)}), flush=True)
+    if "firmware" in args.only:
+        from mocap.imu_node import bench as firmware_bench
+
+        print(json.dumps(firmware_bench.firmware()), flush=True)
     bench.pin_to_one_core()
     if "solver" in args.only:
         try:
@@ -269,7 +273,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
 
     b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
-    b.add_argument("--only", nargs="+", default=["solver", "live", "edge"], choices=["solver", "live", "edge"],
+    b.add_argument("--only", nargs="+", default=["solver", "live", "edge", "firmware"],
+                   choices=["solver", "live", "edge", "firmware"],
                    help="benchmarks to run (default all)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
