@@ -11,7 +11,7 @@
  * inclination corrections measure the gyroscope bias during motion (a Kalman filter, its
  * measurement matched to the same low-pass); at rest the low-passed gyroscope measures it
  * directly. The heading is corrected toward magnetic north while the field's norm and dip
- * match a learned reference. Method and figures: docs/firmware_filter.md.
+ * match a learned reference. Method and figures: docs/firmware.md.
  *
  * Float32 only, no allocation, all state in imu_filter_t. One update per IMU sample.
  */

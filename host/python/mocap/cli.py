@@ -437,7 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
     imf.set_defaults(func=_imu_filter)
 
     eif = sub.add_parser("eval-imu-filter", help="the node's filter (9D, 6D), VQF and Fusion on the BROAD benchmark "
-                         "(../shared/data/imu/broad): RMSE in degrees (docs/firmware_filter.md)")
+                         "(../shared/data/imu/broad): RMSE in degrees (docs/firmware.md)")
     eif.add_argument("--trials", nargs="+", default=None, metavar="NN",
                      help="trial numbers, e.g. 02 03 (default all 18; tuning: 01 04 06 08 10 24 26 28)")
     eif.add_argument("--methods", nargs="+", default=None, metavar="METHOD",
