@@ -14,7 +14,7 @@ static void node_send_heartbeat(node_t *const node, uint32_t now_us) {
       .synced = node->sync_seen && now_us - node->last_sync_us < NODE_SYNC_TIMEOUT_US,
       .chip = node->imu_ready ? CAN_CHIP_ICM42688P : CAN_CHIP_NONE,
       .rate_hz = node->rate_hz,
-      .status = node->status,
+      .status = (uint16_t)(node->status | (node->self_test_failed ? CAN_STATUS_SELF_TEST_FAILED : 0u)),
       .error_count = node->error_count,
   };
   can_frame_t frame;

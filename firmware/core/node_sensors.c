@@ -39,7 +39,7 @@ static void node_probe_imu(node_t *const node, uint32_t now_us) {
     bool passed = false;
     status = icm42688_self_test(&node->imu, &passed);
     node->self_test_done = status == ICM42688_OK;
-    if (node->self_test_done && !passed) node->status |= CAN_STATUS_SELF_TEST_FAILED;
+    node->self_test_failed = node->self_test_done && !passed;
   }
   if (status == ICM42688_OK) status = icm42688_configure(&node->imu, &config);
   if (status != ICM42688_OK) {

@@ -53,6 +53,7 @@ typedef struct {
   bool mag_ready;
   bool imu_probed;           /* a probe of the IMU was tried (state leaves BOOT) */
   bool self_test_done;       /* the IMU's self-test runs once, at the first probe */
+  bool self_test_failed;     /* ... and its verdict is in every heartbeat */
   uint32_t next_imu_probe_us;
   uint32_t next_mag_probe_us;
   uint32_t next_mag_read_us;

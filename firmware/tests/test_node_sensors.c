@@ -280,6 +280,23 @@ static void test_a_bus_that_cannot_send_costs_samples_not_times(void **state) {
   assert_in_range(f->output_count - outputs, 105, 115);
 }
 
+static void test_a_failed_self_test_is_in_every_heartbeat(void **state) {
+  fixture_t *const f = *state;
+  /* Fixture: the chip's self-test response is a tenth of its factory value */
+  f->imu.st_gyro_ratio = 0.1f;
+  /* Test */
+  run_ms(f, 3500);
+  /* Assert: reported long after start-up, and the node streams anyway */
+  assert_int_equal(heartbeat(f).self_test_failed, 1);
+  assert_true(f->output_count > 150);
+}
+
+static void test_a_passed_self_test_is_not_reported(void **state) {
+  fixture_t *const f = *state;
+  run_ms(f, 3500);
+  assert_int_equal(heartbeat(f).self_test_failed, 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(test_streams_a_held_sensor_at_the_output_rate, setup),
@@ -290,6 +307,8 @@ int main(void) {
       cmocka_unit_test_setup(test_a_stuck_imu_is_reported_and_reset, setup),
       cmocka_unit_test_setup(test_a_missing_magnetometer_leaves_the_heading_to_the_gyroscope, setup),
       cmocka_unit_test_setup(test_a_bus_that_cannot_send_costs_samples_not_times, setup),
+      cmocka_unit_test_setup(test_a_failed_self_test_is_in_every_heartbeat, setup),
+      cmocka_unit_test_setup(test_a_passed_self_test_is_not_reported, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
