@@ -4,16 +4,17 @@
 //    "inputs": ["tcp://edge-box-1:5600", ...],   // every edge box and IMU hub (PUB, bound there)
 //    "output": "tcp://*:5700",                  // where PoseFrame and Health are published
 //    "sync": {"group_tolerance_ms": 4, "max_wait_ms": 25, "stale_after_ms": 300,
-//             "imu_max_gap_ms": 40, "imu_max_hold_ms": 15, "imu_only_rate_hz": 60},
-//    "solver": {"function_tolerance": 1e-3, "max_iterations": 10, "predict_motion": true,
-//               "velocity_gain": 0.3, "max_keypoint_cost": 2.5, "heading_time_constant": 1,
-//               "heading_baseline_s": 0},
+//             "imu_max_gap_ms": 40, "imu_max_hold_ms": 15, "imu_history_ms": 1000,
+//             "imu_only_rate_hz": 60},
+//    "solver": {"max_iterations": 10, "velocity_gain": 0.3, "heading_time_constant": 1,
+//               "position": {"weight": 0.04, "loss": "cauchy"}, ...},
 //    "imus_calibrated": true}
-// Paths are relative to the session file. "imus_calibrated": false (default true) says the IMU
-// set's mountings and headings are not known yet: the IMUs are synchronised but not solved
-// with until a Calibration message (proto/mocap/v1/calibration.proto) brings them. Camera ids on
-// the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
-// keys keep the defaults.
+// Paths are relative to the session file. "solver" takes every field of SolverOptions by its
+// name (options_json.h: SolverOptionKeys). "imus_calibrated": false (default true) says the
+// IMU set's mountings and headings are not known yet: the IMUs are synchronised but not
+// solved with until a Calibration message (proto/mocap/v1/calibration.proto) brings them.
+// Camera ids on the wire are the rig's camera names, sensor ids the IMU set's names. Missing
+// "sync" / "solver" keys keep the defaults; an unknown key anywhere is an error naming it.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -40,6 +41,9 @@ struct Session {
 };
 
 bool LoadSession(const std::string& path, Session* out, std::string* error);
+
+// The keys the session's "sync" object accepts.
+std::vector<std::string> SyncOptionKeys();
 
 }  // namespace mocap
 

@@ -32,15 +32,6 @@ const char* ToString(SolveStatus status) {
 
 namespace {
 
-bool TermIsValid(const TermOptions& t, const char* name, std::string* error) {
-  if (!(std::isfinite(t.weight) && t.weight >= 0.0 && std::isfinite(t.loss_scale) &&
-        t.loss_scale > 0.0)) {
-    *error = std::string(name) + ": weight must be >= 0 and loss_scale > 0";
-    return false;
-  }
-  return true;
-}
-
 // Levenberg-Marquardt on the dense normal equations: for ~70 parameters and ~700 residuals
 // this beats the sparse solvers, whose symbolic set-up is redone every frame
 // (docs/performance.md).
@@ -61,32 +52,6 @@ bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
 
 // Position loss scale multiplier of the coarse pass of an initialisation.
 constexpr double kCoarseLossBoost = 1e4;
-
-}  // namespace
-
-bool SolverOptions::IsValid(std::string* error) const {
-  if (!TermIsValid(orientation, "orientation", error) ||
-      !TermIsValid(position, "position", error) ||
-      !TermIsValid(acceleration, "acceleration", error) ||
-      !TermIsValid(pca_projection, "pca_projection", error) ||
-      !TermIsValid(pca_deviation, "pca_deviation", error)) {
-    return false;
-  }
-  if (!accel_at_rest.allFinite() || !(min_confidence >= 0.0 && min_confidence < 1.0) ||
-      !(max_quaternion_error > 0.0) || !(max_history_gap > 0.0) ||
-      !(velocity_gain > 0.0 && velocity_gain <= 1.0) || !(max_keypoint_cost > 0.0) ||
-      !(heading_time_constant >= 0.0 && std::isfinite(heading_time_constant)) ||
-      !(max_heading_step > 0.0 && max_heading_step <= M_PI) ||
-      !(heading_baseline_s >= 0.0 && std::isfinite(heading_baseline_s)) || max_iterations < 1 ||
-      max_initial_iterations < 1 || !(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
-      !(parameter_tolerance >= 0.0)) {
-    *error = "solver options out of range";
-    return false;
-  }
-  return true;
-}
-
-namespace {
 
 // The layout's and the IMU sites' bones are the skeleton's.
 bool CheckSites(const Skeleton& skeleton, const KeypointLayout& layout,
@@ -168,8 +133,8 @@ bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
   return summary.IsSolutionUsable() && theta->allFinite();
 }
 
-bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vector<ImuSite> imus,
-                            std::string* error) {
+bool Solver::CheckCalibration(const Skeleton& skeleton, const KeypointLayout& layout,
+                              const std::vector<ImuSite>& imus, std::string* error) const {
   if (skeleton.num_bones() != skeleton_.num_bones())
     return *error = "the calibration's skeleton has other bones than the solver's", false;
   for (int b = 0; b < skeleton.num_bones(); ++b) {
@@ -183,7 +148,12 @@ bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vecto
     return *error = "the calibration's layout has " + std::to_string(layout.size()) +
                     " keypoints, the solver's " + std::to_string(layout_.size()),
            false;
-  if (!CheckSites(skeleton, layout, imus, error)) return false;
+  return CheckSites(skeleton, layout, imus, error);
+}
+
+bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vector<ImuSite> imus,
+                            std::string* error) {
+  if (!CheckCalibration(skeleton, layout, imus, error)) return false;
   skeleton_ = std::move(skeleton);
   layout_ = std::move(layout);
   imus_ = std::move(imus);
@@ -375,6 +345,57 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   return true;
 }
 
+void Solver::TurnByHeadings(CleanFrame* clean) const {
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (headings_[i] == 0.0 || !clean->imu_world[i]) continue;
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(headings_[i], Eigen::Vector3d::UnitZ()).matrix();
+    clean->imu_world[i] = turn * *clean->imu_world[i];
+    if (clean->accel_world[i]) {
+      const Eigen::Vector3d& g = options_.accel_at_rest;
+      clean->accel_world[i] = turn * (*clean->accel_world[i] + g) - g;
+    }
+  }
+}
+
+bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initialising,
+                         bool reacquiring, Eigen::VectorXd* x, SolveResult* result,
+                         Continuity* continuity) const {
+  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
+  // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the Cauchy
+  // loss would treat their large errors as outliers.
+  auto coarse_pass = [&]() {
+    SolveResult coarse = *result;
+    const bool ok = Optimise(clean, iterations, kCoarseLossBoost, false, x, &coarse);
+    if (!ok) result->message = coarse.message;
+    return ok;
+  };
+  if ((initialising || reacquiring) && !coarse_pass()) {
+    result->status = SolveStatus::kFailed;
+    return false;
+  }
+  const Eigen::VectorXd warm_start = *x;
+  const SolveResult before_fine_pass = *result;
+  if (!Optimise(clean, iterations, 1.0, AccelerationUsable(timestamp, reacquiring), x, result))
+    return false;
+  // The tracked pose lost the keypoints (they sit in the loss's tail, outvoted by the motion
+  // terms): re-acquire it from the keypoints, and forget the velocities that carried it off.
+  *continuity = reacquiring ? Continuity::kReacquired : Continuity::kContinuous;
+  if (!initialising && !reacquiring && result->counts.keypoints_used > 0 &&
+      result->costs.position > options_.max_keypoint_cost * result->counts.keypoints_used) {
+    const Eigen::VectorXd tracked = *x;
+    *x = warm_start;
+    SolveResult again = before_fine_pass;
+    if (coarse_pass() && Optimise(clean, iterations, 1.0, false, x, &again)) {
+      *result = again;
+      result->flags |= kLostAndReacquired;
+      *continuity = Continuity::kRestarted;
+    } else {
+      *x = tracked;  // the re-acquisition failed: keep the tracked solution
+    }
+  }
+  return true;
+}
+
 SolveResult Solver::Solve(const FrameObservations& frame) {
   const auto start = std::chrono::steady_clock::now();
   SolveResult result;
@@ -394,15 +415,7 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
                   "timestamp not finite or not after the previous frame");
   }
   CleanFrame clean = ValidateFrame(frame, rig_, layout_, imus_, options_, &result.counts);
-  for (size_t i = 0; i < imus_.size(); ++i) {
-    if (headings_[i] == 0.0 || !clean.imu_world[i]) continue;
-    const Eigen::Matrix3d turn = Eigen::AngleAxisd(headings_[i], Eigen::Vector3d::UnitZ()).matrix();
-    clean.imu_world[i] = turn * *clean.imu_world[i];
-    if (clean.accel_world[i]) {
-      const Eigen::Vector3d& g = options_.accel_at_rest;
-      clean.accel_world[i] = turn * (*clean.accel_world[i] + g) - g;
-    }
-  }
+  TurnByHeadings(&clean);
   int orientations = 0;
   for (const auto& o : clean.imu_world) orientations += o.has_value();
   if (clean.detections.empty() && orientations == 0) {
@@ -417,45 +430,13 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     x = EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world)
             .theta;
   }
-
   // Keypoints again after frames without them (a camera outage, HS mode): the pose has
   // drifted and is re-acquired like a first frame.
   const bool reacquiring = !initialising && !clean.detections.empty() && !history_.empty() &&
                            !history_.back().position_constrained;
-  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
-  // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the Cauchy
-  // loss would treat their large errors as outliers.
-  auto coarse_pass = [&]() {
-    SolveResult coarse = result;
-    const bool ok = Optimise(clean, iterations, kCoarseLossBoost, false, &x, &coarse);
-    if (!ok) result.message = coarse.message;
-    return ok;
-  };
-  if ((initialising || reacquiring) && !coarse_pass()) {
-    return finish(SolveStatus::kFailed, result.message);
-  }
-  const Eigen::VectorXd warm_start = x;
-  const SolveResult before_fine_pass = result;
-  if (!Optimise(clean, iterations, 1.0, AccelerationUsable(frame.timestamp, reacquiring), &x,
-                &result)) {
+  Continuity continuity = Continuity::kContinuous;
+  if (!SolvePasses(clean, frame.timestamp, initialising, reacquiring, &x, &result, &continuity))
     return finish(result.status, result.message);
-  }
-  // The tracked pose lost the keypoints (they sit in the loss's tail, outvoted by the motion
-  // terms): re-acquire it from the keypoints, and forget the velocities that carried it off.
-  Continuity continuity = reacquiring ? Continuity::kReacquired : Continuity::kContinuous;
-  if (!initialising && !reacquiring && result.counts.keypoints_used > 0 &&
-      result.costs.position > options_.max_keypoint_cost * result.counts.keypoints_used) {
-    const Eigen::VectorXd tracked = x;
-    x = warm_start;
-    SolveResult again = before_fine_pass;
-    if (coarse_pass() && Optimise(clean, iterations, 1.0, false, &x, &again)) {
-      result = again;
-      result.flags |= kLostAndReacquired;
-      continuity = Continuity::kRestarted;
-    } else {
-      x = tracked;  // the re-acquisition failed: keep the tracked solution
-    }
-  }
   theta_ = x;
   initialised_ = true;
   Remember(clean, !(result.flags & kPositionUnconstrained), continuity);

@@ -13,6 +13,7 @@
 #include "mocap/residuals/calibration_residuals.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/so3.h"
+#include "option_checks.h"
 
 namespace mocap {
 namespace {
@@ -39,31 +40,18 @@ bool CheckInputs(const Skeleton& skeleton, const std::vector<ImuSite>& imus,
     if (!group->empty() && group->size() != static_cast<size_t>(skeleton.num_bones()))
       return Fail(error, "scale_group and shift_group need one entry per bone (or none)");
   }
-  if (!(options.scale_sigma > 0) || !(options.shift_sigma > 0) || !(options.site_sigma > 0) ||
-      options.max_iterations < 1)
-    return Fail(error, "the priors' sigmas must be positive, max_iterations at least 1");
   if (!options.heading_priors.empty() && options.heading_priors.size() != imus.size())
     return Fail(error, "heading_priors needs one entry per IMU (or none)");
   if (!options.joint_sigmas.empty() &&
       options.joint_sigmas.size() != static_cast<size_t>(skeleton.num_bones()))
     return Fail(error, "joint_sigmas needs one entry per bone (or none)");
   for (const HeldPose& h : options.held_poses) {
-    if (h.frame < 0 || h.frame >= static_cast<int>(frames.size()) ||
-        h.theta.size() != skeleton.pose_dim() || !h.theta.allFinite() || !(h.sigma > 0))
-      return Fail(error,
-                  "a held pose needs a frame of the window, a finite pose and a positive sigma");
-  }
-  for (const Eigen::Vector2d& h : options.heading_priors) {
-    if (!std::isfinite(h(0)) || std::isnan(h(1)))
-      return Fail(error, "a heading prior needs a finite yaw and a sigma");
-  }
-  for (const Eigen::Vector3d& sigma : options.shift_sigmas) {
-    if (!(sigma.array() > 0).all() || !sigma.allFinite())
-      return Fail(error, "shift_sigmas must be positive");
+    if (h.frame >= static_cast<int>(frames.size()) || h.theta.size() != skeleton.pose_dim())
+      return Fail(error, "a held pose needs a frame of the window and a pose of the skeleton");
   }
   if (prior && prior->dof() != skeleton.pose_dim() - 6)
     return Fail(error, "the prior's dimension does not match the skeleton");
-  return options.terms.IsValid(error);
+  return options.IsValid(error);
 }
 
 // A fixed Gaussian prior sum_i ((x_i - mean_i) / sigma_i)^2 on a block.
@@ -364,6 +352,32 @@ void KeepObservedSiteChanges(double max_std, const std::vector<Eigen::Vector3d>&
 }
 
 }  // namespace
+
+bool CalibrationOptions::IsValid(std::string* error) const {
+  internal::OptionChecks check;
+  std::string messages;
+  const bool terms_valid = terms.IsValid(&messages);
+  check.Nested(terms_valid, "terms: " + messages);
+  check.Expect(scale_sigma > 0.0, "scale_sigma", scale_sigma, "> 0");
+  check.Expect(shift_sigma > 0.0, "shift_sigma", shift_sigma, "> 0 m");
+  for (const Eigen::Vector3d& sigma : shift_sigmas)
+    check.Expect((sigma.array() > 0).all() && sigma.allFinite(), "shift_sigmas", "finite, > 0 m");
+  for (const Eigen::Vector3d& sigma : joint_sigmas)
+    check.Expect(!sigma.hasNaN() && (sigma.array() >= 0).all(), "joint_sigmas", ">= 0 rad");
+  for (const HeldPose& h : held_poses) {
+    check.Expect(h.frame >= 0, "held_poses.frame", h.frame, ">= 0");
+    check.Expect(h.theta.allFinite(), "held_poses.theta", "finite");
+    check.Expect(h.sigma > 0.0, "held_poses.sigma", h.sigma, "> 0 rad");
+  }
+  for (const Eigen::Vector2d& h : heading_priors)
+    check.Expect(std::isfinite(h(0)) && !std::isnan(h(1)), "heading_priors",
+                 "a finite yaw and a sigma");
+  check.Expect(site_sigma > 0.0, "site_sigma", site_sigma, "> 0 m");
+  check.Expect(site_observable_std >= 0.0, "site_observable_std", site_observable_std, ">= 0 m");
+  check.Expect(max_iterations >= 1, "max_iterations", max_iterations, ">= 1");
+  check.Expect(num_threads >= 1, "num_threads", num_threads, ">= 1");
+  return check.Done(error);
+}
 
 bool CalibrateWindow(const Skeleton& skeleton, const Rig& rig, const KeypointLayout& layout,
                      const std::vector<ImuSite>& imus, const std::optional<PosePrior>& prior,

@@ -18,74 +18,11 @@
 #include "mocap/prior.h"
 #include "mocap/sites.h"
 #include "mocap/skeleton.h"
+#include "mocap/solver_options.h"
 
 namespace mocap {
 
 struct CleanFrame;  // src/frame_validation.h
-
-enum class LossType { kTrivial, kCauchy, kHuber };
-
-// One cost term: E = rho(weight * |e|^2), rho scaled by loss_scale (rho(s) = a log(1 + s/a)
-// for Cauchy with a = loss_scale). Units of weight are the inverse square of the term's.
-struct TermOptions {
-  bool enabled = true;
-  double weight = 1.0;
-  LossType loss = LossType::kTrivial;
-  double loss_scale = 1.0;
-};
-
-struct SolverOptions {
-  // Weights: 1 / (typical error)^2 of each measurement, so a typical error costs ~1.
-  TermOptions orientation{true, 1.0 / (0.035 * 0.035), LossType::kCauchy, 4.0};  // 2 degrees
-  TermOptions position{true, 1.0 / 25.0, LossType::kCauchy, 1.0};                // 5 pixels
-  // E_A compares the measured acceleration with the second difference of the solved
-  // positions, whose previous velocity is filtered (velocity_gain): 18 m/s^2 and the gain
-  // 0.3 were tuned on the validation clips (docs/results.md, "Tuning").
-  TermOptions acceleration{true, 1.0 / (18.0 * 18.0), LossType::kCauchy, 1.0};
-  TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
-  // One standard deviation of the prior costs as much as a keypoint at its typical error;
-  // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander (issue 3 eval).
-  TermOptions pca_deviation{true, 1.0, LossType::kTrivial, 1.0};
-
-  Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
-  double min_confidence = 0.05;                  // detections at or below are "not detected"
-  double max_quaternion_error = 1e-3;            // | |q| - 1 | above this: the reading is rejected
-  double max_history_gap = 0.25;  // s: older solved frames do not feed E_A or prediction
-  // E_A's previous velocity of each IMU site (see MotionState): 1 takes the difference of
-  // the last two solutions, as the slide's second difference; below 1, a complementary
-  // filter of that difference and the velocity integrated from the accelerometers.
-  double velocity_gain = 0.3;
-  // Mean robust cost per keypoint (rho, in the position loss's units) above which the
-  // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
-  // tracked pose scores ~1.1, one carried off by the motion terms 4-8 (issue 3 eval).
-  double max_keypoint_cost = 2.5;
-  // Warm start from a constant-velocity prediction of the two previous solutions (on
-  // SO(3) per joint) instead of the previous solution alone.
-  bool predict_motion = true;
-  // Heading tracking (0: off): each IMU's reference frame is turned about world z by a
-  // heading correction psi_i that follows, with this time constant (s), the yaw between the
-  // solved sensor orientation and the measured one on frames the keypoints constrain. Video
-  // sees a segment's yaw (a limb's when it is not vertical, the pelvis' through the hips), so
-  // a heading estimated from a short window, or drifting as magnetometers do indoors, is
-  // pulled to what the cameras see; a yaw video does not see leaves psi_i where it is.
-  double heading_time_constant = 0.0;
-  double max_heading_step = 0.1;  // rad: a frame's yaw beyond this counts as this much
-  // 0: the headings follow the yaw itself (headings fitted to this video, as the window
-  // calibration's are). > 0: each IMU's mean yaw over its first heading_baseline_s seconds
-  // of tracked frames is its baseline, and the heading follows changes from it: drift only,
-  // for headings from elsewhere (a suit's calibration) whose video yaw the detector's
-  // systematic keypoint offsets bias by a few degrees.
-  double heading_baseline_s = 0.0;
-  int max_iterations = 10;           // per warm-started frame
-  int max_initial_iterations = 100;  // for the first frame
-  // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
-  // 2-3 iterations; tighter tolerances add iterations, not accuracy (docs/performance.md).
-  double function_tolerance = 1e-3;
-  double gradient_tolerance = 1e-10;
-  double parameter_tolerance = 1e-8;
-
-  bool IsValid(std::string* error) const;
-};
 
 // Fits theta (in place, from its current value) to 3D target points of sites by least
 // squares; targets with a non-positive or non-finite weight (1/m^2) are ignored. Returns
@@ -125,9 +62,12 @@ class Solver {
   // with as many keypoints; any IMU sites on its bones) from the next frame on, the pose and
   // its history kept: a calibration refined during capture. The heading corrections start
   // again from zero (the references are new) and E_A from the next two solves. False with
-  // *error, nothing changed, when it does not fit.
+  // *error, nothing changed, when it does not fit (CheckCalibration).
   bool SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vector<ImuSite> imus,
                       std::string* error);
+  // Whether SetCalibration would take this calibration; false with *error saying why not.
+  bool CheckCalibration(const Skeleton& skeleton, const KeypointLayout& layout,
+                        const std::vector<ImuSite>& imus, std::string* error) const;
   // Replaces the options (weights, losses, tolerances) from the next frame on; false and
   // *error set, options unchanged, when they are out of range.
   bool SetOptions(const SolverOptions& options, std::string* error);
@@ -169,6 +109,13 @@ class Solver {
   void UpdatePriorResiduals();
   // Moves the heading corrections towards the solved pose's (heading_time_constant).
   void TrackHeadings(const CleanFrame& frame);
+  // Turns each IMU's world orientation and acceleration by its heading correction.
+  void TurnByHeadings(CleanFrame* frame) const;
+  // The optimisation of a frame from *x: a coarse pass first when (re)initialising, the fine
+  // pass, then a re-acquisition when the tracked pose lost the keypoints (max_keypoint_cost).
+  // False, with the status and message in *result, when a pass fails.
+  bool SolvePasses(const CleanFrame& frame, double timestamp, bool initialising, bool reacquiring,
+                   Eigen::VectorXd* x, SolveResult* result, Continuity* continuity) const;
   // The warm start of a frame at `timestamp`.
   Eigen::VectorXd WarmStart(double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in

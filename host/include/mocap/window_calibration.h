@@ -42,6 +42,13 @@ struct HeldPose {
   int frame = 0;          // index into the window's frames
   Eigen::VectorXd theta;  // pose_dim; only the joints' entries are used
   double sigma = 0.05;    // rad
+
+  template <typename Visit>
+  static void VisitFields(Visit&& visit) {
+    visit("frame", &HeldPose::frame);
+    visit("theta", &HeldPose::theta);
+    visit("sigma", &HeldPose::sigma);
+  }
 };
 
 struct CalibrationOptions {
@@ -77,6 +84,34 @@ struct CalibrationOptions {
        estimate_mounts = true, estimate_headings = true;
   int max_iterations = 60;
   int num_threads = 2;
+
+  // True when every field is in range by itself; else *error holds one message per failing
+  // condition, joined by "; ". (Sizes that depend on the window, the skeleton and the IMU
+  // set are checked by CalibrateWindow.)
+  bool IsValid(std::string* error) const;
+
+  // Each field once, by name (the Python attribute): see solver_options.h.
+  template <typename Visit>
+  static void VisitFields(Visit&& visit) {
+    visit("terms", &CalibrationOptions::terms);
+    visit("scale_group", &CalibrationOptions::scale_group);
+    visit("shift_group", &CalibrationOptions::shift_group);
+    visit("scale_sigma", &CalibrationOptions::scale_sigma);
+    visit("shift_sigma", &CalibrationOptions::shift_sigma);
+    visit("shift_sigmas", &CalibrationOptions::shift_sigmas);
+    visit("joint_sigmas", &CalibrationOptions::joint_sigmas);
+    visit("held_poses", &CalibrationOptions::held_poses);
+    visit("heading_priors", &CalibrationOptions::heading_priors);
+    visit("site_sigma", &CalibrationOptions::site_sigma);
+    visit("site_observable_std", &CalibrationOptions::site_observable_std);
+    visit("estimate_scales", &CalibrationOptions::estimate_scales);
+    visit("estimate_shifts", &CalibrationOptions::estimate_shifts);
+    visit("estimate_sites", &CalibrationOptions::estimate_sites);
+    visit("estimate_mounts", &CalibrationOptions::estimate_mounts);
+    visit("estimate_headings", &CalibrationOptions::estimate_headings);
+    visit("max_iterations", &CalibrationOptions::max_iterations);
+    visit("num_threads", &CalibrationOptions::num_threads);
+  }
 };
 
 struct CalibrationResult {

@@ -1,0 +1,32 @@
+// SolverOptions as the session file's "solver" object, derived from the fields the struct
+// names (SolverOptions::VisitFields): every field is a key of the same name; a term
+// (TermOptions) is an object of its own fields, e.g. {"position": {"weight": 0.04}}; "loss"
+// is "trivial", "cauchy" or "huber"; "accel_at_rest" is [x, y, z]. Keys left out keep their
+// defaults. An unknown key or a value of the wrong type is an error naming the key, never
+// ignored: an option misspelt in a session file must not silently fall back to its default.
+#ifndef MOCAP_DAEMON_OPTIONS_JSON_H_
+#define MOCAP_DAEMON_OPTIONS_JSON_H_
+
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "mocap/solver_options.h"
+
+namespace mocap {
+
+// Reads the keys of j into *options (the others keep their values), then checks the result
+// (SolverOptions::IsValid). False with *error naming the key or the condition.
+bool ReadSolverOptions(const nlohmann::json& j, SolverOptions* options, std::string* error);
+// The same from JSON text.
+bool ParseSolverOptionsJson(const std::string& text, SolverOptions* options, std::string* error);
+
+// Every field of options, as ReadSolverOptions reads them back.
+std::string SolverOptionsToJson(const SolverOptions& options);
+
+// Every key ReadSolverOptions accepts, a term's fields as "term.field".
+std::vector<std::string> SolverOptionKeys();
+
+}  // namespace mocap
+
+#endif  // MOCAP_DAEMON_OPTIONS_JSON_H_

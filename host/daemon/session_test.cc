@@ -1,0 +1,79 @@
+// The session file: every key is read, an unknown one is an error naming it.
+#include "session.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "synthetic_scene.h"
+
+namespace mocap {
+namespace {
+
+using nlohmann::json;
+
+// A session of the shipped data files with the given extra keys.
+std::string WriteSession(const json& extra) {
+  json j = {{"format", "mocap.session/1"},
+            {"skeleton", testing::DataPath("skeleton_default.json")},
+            {"layout", testing::DataPath("layouts/coco17.json")},
+            {"imus", testing::DataPath("imus13.json")},
+            {"rig", ::testing::TempDir() + "/rig.json"},
+            {"inputs", {"tcp://localhost:5600"}},
+            {"output", "tcp://*:5700"}};
+  std::ofstream(::testing::TempDir() + "/rig.json")
+      << RigToJson(testing::MakeScene(2, "coco17").rig);
+  j.update(extra);
+  const std::string path = ::testing::TempDir() + "/session.json";
+  std::ofstream(path) << j.dump();
+  return path;
+}
+
+TEST(Session, SolverAndSyncKeysAreRead) {
+  Session s;
+  std::string error;
+  ASSERT_TRUE(LoadSession(
+      WriteSession(
+          {{"solver",
+            {{"velocity_gain", 0.5}, {"max_heading_step", 0.2}, {"position", {{"loss", "huber"}}}}},
+           {"sync", {{"max_wait_ms", 30}, {"imu_history_ms", 500}, {"imu_only_rate_hz", 100}}},
+           {"imus_calibrated", false}}),
+      &s, &error))
+      << error;
+  EXPECT_EQ(s.solver.velocity_gain, 0.5);
+  EXPECT_EQ(s.solver.max_heading_step, 0.2);
+  EXPECT_EQ(s.solver.position.loss, LossType::kHuber);
+  EXPECT_EQ(s.sync.max_wait_ns, 30'000'000);
+  EXPECT_EQ(s.sync.imu_history_ns, 500'000'000);
+  EXPECT_EQ(s.sync.imu_only_rate_hz, 100);
+  EXPECT_FALSE(s.imus_calibrated);
+  EXPECT_EQ(s.rig.cameras.size(), 2u);
+  EXPECT_EQ(s.layout.name, "coco17");
+}
+
+TEST(Session, AnUnknownKeyIsAnErrorNamingIt) {
+  const std::vector<std::pair<json, std::string>> cases = {
+      {{{"solver", {{"velocity_gian", 0.5}}}}, "'velocity_gian'"},
+      {{{"sync", {{"max_wait", 30}}}}, "'max_wait'"},
+      {{{"sync", {{"max_wait_ms", "30"}}}}, "'max_wait_ms' must be a number"},
+      {{{"solvr", json::object()}}, "'solvr'"},
+      {{{"solver", {{"max_iterations", 0}}}}, "max_iterations = 0 is out of range"},
+  };
+  for (const auto& [extra, message] : cases) {
+    Session s;
+    std::string error;
+    EXPECT_FALSE(LoadSession(WriteSession(extra), &s, &error)) << extra.dump();
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+TEST(Session, TheSyncKeysAreThoseDocumented) {
+  const std::vector<std::string> keys = SyncOptionKeys();
+  EXPECT_EQ(keys, (std::vector<std::string>{"group_tolerance_ms", "max_wait_ms", "stale_after_ms",
+                                            "imu_max_gap_ms", "imu_max_hold_ms", "imu_history_ms",
+                                            "imu_only_rate_hz"}));
+}
+
+}  // namespace
+}  // namespace mocap

@@ -1,0 +1,121 @@
+// The options of the per-frame solve (solver.h): plain structs with their defaults inline.
+//
+// Each struct names its fields once, in VisitFields: visit(name, &Struct::field) for every
+// field, the name being the session file's key and the Python attribute. The session reader
+// (daemon/options_json.h), the Python bindings and the field-list tests are derived from it,
+// so a field added here and to VisitFields reaches all of them; src/options_test.cc fails
+// when a field is left out of VisitFields.
+#ifndef MOCAP_SOLVER_OPTIONS_H_
+#define MOCAP_SOLVER_OPTIONS_H_
+
+#include <Eigen/Core>
+#include <string>
+
+namespace mocap {
+
+enum class LossType { kTrivial, kCauchy, kHuber };
+
+// One cost term: E = rho(weight * |e|^2), rho scaled by loss_scale (rho(s) = a log(1 + s/a)
+// for Cauchy with a = loss_scale). Units of weight are the inverse square of the term's.
+struct TermOptions {
+  bool enabled = true;
+  double weight = 1.0;
+  LossType loss = LossType::kTrivial;
+  double loss_scale = 1.0;
+
+  // One message per failing condition, each field prefixed with `name` ("position.").
+  bool IsValid(const std::string& name, std::string* error) const;
+
+  template <typename Visit>
+  static void VisitFields(Visit&& visit) {
+    visit("enabled", &TermOptions::enabled);
+    visit("weight", &TermOptions::weight);
+    visit("loss", &TermOptions::loss);
+    visit("loss_scale", &TermOptions::loss_scale);
+  }
+};
+
+struct SolverOptions {
+  // Weights: 1 / (typical error)^2 of each measurement, so a typical error costs ~1.
+  TermOptions orientation{true, 1.0 / (0.035 * 0.035), LossType::kCauchy, 4.0};  // 2 degrees
+  TermOptions position{true, 1.0 / 25.0, LossType::kCauchy, 1.0};                // 5 pixels
+  // E_A compares the measured acceleration with the second difference of the solved
+  // positions, whose previous velocity is filtered (velocity_gain): 18 m/s^2 and the gain
+  // 0.3 were tuned on the validation clips (docs/results.md, "Tuning").
+  TermOptions acceleration{true, 1.0 / (18.0 * 18.0), LossType::kCauchy, 1.0};
+  TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
+  // One standard deviation of the prior costs as much as a keypoint at its typical error;
+  // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander
+  // (measured on the evaluation clips).
+  TermOptions pca_deviation{true, 1.0, LossType::kTrivial, 1.0};
+
+  Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
+  double min_confidence = 0.05;                  // detections at or below are "not detected"
+  double max_quaternion_error = 1e-3;            // | |q| - 1 | above this: the reading is rejected
+  double max_history_gap = 0.25;  // s: older solved frames do not feed E_A or prediction
+  // E_A's previous velocity of each IMU site (see Solver::MotionState): 1 takes the
+  // difference of the last two solutions, as the slide's second difference; below 1, a
+  // complementary filter of that difference and the velocity integrated from the IMUs.
+  double velocity_gain = 0.3;
+  // Mean robust cost per keypoint (rho, in the position loss's units) above which the
+  // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
+  // tracked pose scores ~1.1, one carried off by the motion terms 4-8
+  // (measured on the evaluation clips).
+  double max_keypoint_cost = 2.5;
+  // Warm start from a constant-velocity prediction of the two previous solutions (on
+  // SO(3) per joint) instead of the previous solution alone.
+  bool predict_motion = true;
+  // Heading tracking (0: off): each IMU's reference frame is turned about world z by a
+  // heading correction psi_i that follows, with this time constant (s), the yaw between the
+  // solved sensor orientation and the measured one on frames the keypoints constrain. Video
+  // sees a segment's yaw (a limb's when it is not vertical, the pelvis' through the hips), so
+  // a heading estimated from a short window, or drifting as magnetometers do indoors, is
+  // pulled to what the cameras see; a yaw video does not see leaves psi_i where it is.
+  double heading_time_constant = 0.0;
+  double max_heading_step = 0.1;  // rad: a frame's yaw beyond this counts as this much
+  // 0: the headings follow the yaw itself (headings fitted to this video, as the window
+  // calibration's are). > 0: each IMU's mean yaw over its first heading_baseline_s seconds
+  // of tracked frames is its baseline, and the heading follows changes from it: drift only,
+  // for headings from elsewhere (a suit's calibration) whose video yaw the detector's
+  // systematic keypoint offsets bias by a few degrees.
+  double heading_baseline_s = 0.0;
+  int max_iterations = 10;           // per warm-started frame
+  int max_initial_iterations = 100;  // for the first frame
+  // Relative cost change that ends a frame. Warm-started frames reach their accuracy in
+  // 2-3 iterations; tighter tolerances add iterations, not accuracy (docs/performance.md).
+  double function_tolerance = 1e-3;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+
+  // True when every field is in range; else *error holds one message per failing
+  // condition ("velocity_gain = 0 is out of range (must be in (0, 1])"), joined by "; ".
+  bool IsValid(std::string* error) const;
+
+  template <typename Visit>
+  static void VisitFields(Visit&& visit) {
+    visit("orientation", &SolverOptions::orientation);
+    visit("position", &SolverOptions::position);
+    visit("acceleration", &SolverOptions::acceleration);
+    visit("pca_projection", &SolverOptions::pca_projection);
+    visit("pca_deviation", &SolverOptions::pca_deviation);
+    visit("accel_at_rest", &SolverOptions::accel_at_rest);
+    visit("min_confidence", &SolverOptions::min_confidence);
+    visit("max_quaternion_error", &SolverOptions::max_quaternion_error);
+    visit("max_history_gap", &SolverOptions::max_history_gap);
+    visit("velocity_gain", &SolverOptions::velocity_gain);
+    visit("max_keypoint_cost", &SolverOptions::max_keypoint_cost);
+    visit("predict_motion", &SolverOptions::predict_motion);
+    visit("heading_time_constant", &SolverOptions::heading_time_constant);
+    visit("max_heading_step", &SolverOptions::max_heading_step);
+    visit("heading_baseline_s", &SolverOptions::heading_baseline_s);
+    visit("max_iterations", &SolverOptions::max_iterations);
+    visit("max_initial_iterations", &SolverOptions::max_initial_iterations);
+    visit("function_tolerance", &SolverOptions::function_tolerance);
+    visit("gradient_tolerance", &SolverOptions::gradient_tolerance);
+    visit("parameter_tolerance", &SolverOptions::parameter_tolerance);
+  }
+};
+
+}  // namespace mocap
+
+#endif  // MOCAP_SOLVER_OPTIONS_H_
