@@ -1,9 +1,10 @@
 """The system end to end on loopback: edge processes -> ZeroMQ -> mocapd -> PoseFrame.
 
-Real processes, real sockets, real time (a few seconds of take): every frame comes back
-solved, a camera box that is unplugged (its socket closed) and an IMU that goes silent
-degrade the solve, which recovers when they return; garbage on the wire is counted and
-dropped while the host keeps solving."""
+Real processes, real sockets, real time (a few seconds of take): the camera boxes are the
+real box (`python -m mocap_edge camera`) on the simulated backend (`--source sim:STREAMS`).
+Every frame comes back solved, a camera box that is unplugged (its socket closed for the
+span, bound again after) and an IMU that goes silent degrade the solve, which recovers when
+they return; garbage on the wire is counted and dropped while the host keeps solving."""
 
 import json
 import subprocess
@@ -50,12 +51,16 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     assert np.abs(corrections).max() > 0.1, corrections
 
     # The recording (session attached) solved offline through the same pipeline gives the
-    # live poses back.
+    # live poses back until the box rejoins: from then on the recorder and mocapd each
+    # reconnect to it on their own ZeroMQ back-off (randomised, up to 2 s), so the recording
+    # may lack cam3 frames mocapd solved with, and every later pose differs by its warm start.
     poses, *_ = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
     common = [p for p in poses if p.capture_time_ns in live_by_time]
     assert len(common) >= 0.98 * len(run.poses)
-    diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in common]
+    before = [p for p in common if p.capture_time_ns - run.start_ns < 3.5e9]
+    assert len(before) >= 0.98 * 3.5 * 60
+    diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in before]
     assert np.median(diff) < 1e-6, np.percentile(diff, [50, 90, 100])
 
 

@@ -1,81 +1,134 @@
-"""python -m mocap_edge camera --source URI --camera ID --bind ENDPOINT [--hs PERIOD BURST] [--realtime]
-   python -m mocap_edge camera|imu-hub --streams FILE --bind ENDPOINT --start-ns T   (simulated studio)"""
+"""python -m mocap_edge camera --source URI --camera ID --bind ENDPOINT [--model M] [--hs PERIOD BURST]
+       [--realtime] [--trigger CHIP:LINE --exposure-mid-us US]
+   python -m mocap_edge camera --source sim:STREAMS --camera ID --bind ENDPOINT --start-ns T [--seed S]
+       [--stop FROM_S TO_S]                                            (a box of the simulated studio)
+   python -m mocap_edge imu-hub --streams STREAMS --bind ENDPOINT --start-ns T      (its IMU hub)"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import math
 import sys
-
 import time
 
-from mocap_edge import camera_node, imu_hub
+from mocap_edge import camera_box, imu_hub, pacing
+from mocap_edge.detect.base import Detector, open_detector
+from mocap_edge.errors import EdgeError, TriggerError
+from mocap_edge.sources.base import open_source
 from mocap_edge.streams import Streams
+from mocap_edge.trigger import GpiodTrigger, TriggerPairing
+
+Span = tuple[float, float]  # from_s, to_s of the take
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="mocap_edge", description="an edge box playing a stream file in real time")
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="mocap_edge", description="an edge box: a camera box (a real camera, a "
+                                "video, or a camera of the simulated studio) or the simulated studio's IMU hub")
     p.add_argument("role", choices=["camera", "imu-hub"])
-    p.add_argument("--source", help="role camera: capture and detect from a frame source, e.g. video:cam01.mp4, "
-                   "v4l2:/dev/video0, libcamera:0, images:DIR (with --fps)")
+    p.add_argument("--source", help="role camera: the frame source, e.g. libcamera:0, v4l2:/dev/video0, "
+                   "video:cam01.mp4, images:DIR (with --fps), fake:, sim:STREAMS (a camera of the simulated studio)")
     p.add_argument("--fps", type=float, default=None, help="frame rate of an images: source")
     p.add_argument("--hs", nargs=2, type=int, default=(1, 1), metavar=("PERIOD", "BURST"),
                    help="detect on BURST consecutive frames of every PERIOD (high-speed mode)")
     p.add_argument("--realtime", action="store_true", help="play a file source at its capture times")
-    p.add_argument("--model", default="blazepose", help="keypoint model: blazepose or a configuration JSON")
+    p.add_argument("--model", help="keypoint model: blazepose (the default), a model configuration JSON, fake:, "
+                   "or sim:STREAMS (the default with a sim: source)")
     p.add_argument("--trigger", metavar="CHIP:LINE", help="pair frames with the rising edges of this GPIO line "
                    "(e.g. /dev/gpiochip0:17; docs/sync.md)")
     p.add_argument("--exposure-mid-us", type=float, default=0.0,
                    help="with --trigger: trigger edge to mid-exposure (sensor delay + exposure / 2), microseconds")
-    p.add_argument("--streams", help="stream file of the simulated studio (.npz, mocap_edge.streams)")
+    p.add_argument("--streams", help="role imu-hub: stream file of the simulated studio (.npz, mocap_edge.streams)")
     p.add_argument("--bind", required=True, help="ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
-    p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now)")
-    p.add_argument("--camera", help="camera id (role camera)")
-    p.add_argument("--stop", nargs=2, type=float, metavar=("FROM_S", "TO_S"), help="unplug during this span")
+    p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now): "
+                   "the capture time of a file's, fake or simulated source's first frame")
+    p.add_argument("--camera", default="cam0", help="camera id (role camera; with sim:, the stream file's camera)")
+    p.add_argument("--stop", nargs=2, type=float, metavar=("FROM_S", "TO_S"),
+                   help="unplug during this span of the take: a sim: camera box (its socket closed, bound again "
+                   "after), or the imu hub's --stop-sensor")
     p.add_argument("--stop-sensor", help="sensor silenced during --stop (role imu-hub)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="seed of the simulated detection latency (sim: model)")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = parser()
     a = p.parse_args(argv)
     if a.start_ns is None:
         a.start_ns = time.time_ns()
-    if a.role == "camera" and a.source:
-        return _camera_box(a)
-    if not a.streams:
-        p.error("--streams (simulated studio) or, for a camera, --source is needed")
-    streams = Streams.load(a.streams)
-    if a.role == "camera":
-        n = camera_node.run(streams, a.camera, a.bind, a.start_ns, seed=a.seed, stop_at=tuple(a.stop) if a.stop else None)
-        print(f"{a.camera}: {n} frames sent", file=sys.stderr)
-    else:
-        stop = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
-        n = imu_hub.run(streams, a.bind, a.start_ns, stop_sensor=stop)
-        print(f"imu hub: {n} batches sent", file=sys.stderr)
+    if a.role == "camera" and not a.source:
+        p.error("role camera needs --source (sim:STREAMS for a camera of the simulated studio)")
+    if a.role == "imu-hub" and not a.streams:
+        p.error("role imu-hub needs --streams (the simulated studio's stream file)")
+    try:
+        return _camera(a) if a.role == "camera" else _imu_hub(a)
+    except EdgeError as e:
+        print(f"mocap_edge: {e}", file=sys.stderr)
+        return 1
+
+
+def _imu_hub(a: argparse.Namespace) -> int:
+    stop = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
+    n = imu_hub.run(Streams.load(a.streams), a.bind, a.start_ns, stop_sensor=stop)
+    print(f"imu hub: {n} batches sent", file=sys.stderr)
     return 0
 
 
-def _camera_box(a) -> int:
-    from mocap_edge import camera_box
-    from mocap_edge.detect.topdown import load_model
-    from mocap_edge.trigger import GpiodTrigger, TriggerPairing
-    from mocap_edge.errors import EdgeError
-    from mocap_edge.sources.base import open_source
-
-    scheme = a.source.partition(":")[0]
-    options = ({"start_ns": a.start_ns} if scheme in ("video", "images", "fake") else {}) | (
-        {"fps": a.fps} if a.fps else {})
-    try:
-        with open_source(a.source, **options) as source:
-            pairing = None
-            if a.trigger:
-                chip, _, line = a.trigger.rpartition(":")
-                pairing = TriggerPairing(GpiodTrigger(chip, int(line)), source.nominal_fps)
-            counts = camera_box.run(source, a.camera or "cam0", a.bind, tuple(a.hs), pairing=pairing,
-                                    realtime=a.realtime, model=load_model(a.model),
-                                    exposure_mid_ns=round(a.exposure_mid_us * 1000))
-    except (EdgeError, ValueError) as e:  # ValueError: a --trigger line that is not a number
-        print(f"mocap_edge: {e}", file=sys.stderr)
-        return 1
+def _camera(a: argparse.Namespace) -> int:
+    counts = camera_box.BoxCounts()
+    for span in _spans(a):
+        counts += _run_box(a, span)
     print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people",
           file=sys.stderr)
     return 0
+
+
+def _spans(a: argparse.Namespace) -> list[Span | None]:
+    """When the box is on: all along, or before and after the span it is unplugged (--stop)."""
+    if not a.stop:
+        return [None]
+    if not a.source.startswith("sim:"):
+        raise EdgeError("--stop unplugs a simulated box: it needs a sim: source")
+    return [(-math.inf, a.stop[0]), (a.stop[1], math.inf)]
+
+
+def _run_box(a: argparse.Namespace, span: Span | None) -> camera_box.BoxCounts:
+    """The box from its start (plugged in at the span's start) to the end of its source."""
+    if span and span[0] > -math.inf:
+        pacing.sleep_until(a.start_ns + round(span[0] * 1e9))
+    with contextlib.ExitStack() as stack:
+        source = stack.enter_context(open_source(a.source, **_source_options(a, span)))
+        pairing = None
+        if a.trigger:
+            pairing = TriggerPairing(stack.enter_context(_trigger(a.trigger)), source.nominal_fps)
+        return camera_box.run(source, a.camera, a.bind, tuple(a.hs), pairing=pairing, realtime=a.realtime,
+                              model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000))
+
+
+def _source_options(a: argparse.Namespace, span: Span | None) -> dict[str, object]:
+    scheme = a.source.partition(":")[0]
+    options: dict[str, object] = {"start_ns": a.start_ns} if scheme in ("video", "images", "fake", "sim") else {}
+    if a.fps:
+        options["fps"] = a.fps
+    if scheme == "sim":
+        options["camera"] = a.camera
+        if span:
+            options["span"] = span
+    return options
+
+
+def _model(a: argparse.Namespace) -> Detector:
+    spec = a.model or (a.source if a.source.startswith("sim:") else "blazepose")
+    if spec.startswith("sim:"):
+        return open_detector(spec, camera=a.camera, start_ns=a.start_ns, seed=a.seed)
+    return open_detector(spec)
+
+
+def _trigger(spec: str) -> GpiodTrigger:
+    chip, _, line = spec.rpartition(":")
+    if not chip or not line.isdigit():
+        raise TriggerError(f"--trigger {spec}: expected CHIP:LINE, e.g. /dev/gpiochip0:17")
+    return GpiodTrigger(chip, int(line))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
-"""The camera box: frames from a source (camera, video, images), optionally paired with
-the studio's trigger edges, keypoints from the on-device detector with region tracking,
-one KeypointFrame per captured frame published over ZeroMQ.
+"""The camera box: frames from a source (camera, video, images, the simulated studio),
+optionally paired with the studio's trigger edges, keypoints from a model (detect/) with
+region tracking, one KeypointFrame per captured frame published over ZeroMQ.
 
 High-speed mode: detection on `burst` consecutive frames of every `period`; the other
 frames are published with detected = false, so the host keeps the frame clock.
@@ -9,6 +9,7 @@ frames are published with detected = false, so the host keeps the frame clock.
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 from collections.abc import Iterable, Iterator
 
@@ -16,10 +17,13 @@ import zmq
 
 from mocap import transport, wire
 from mocap_edge import pacing
-from mocap_edge.detect.blazepose import BlazePose, Person
+from mocap_edge.detect.base import Detector, Person, open_detector
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import Frame
 from mocap_edge.trigger import TriggerPairing
+
+log = logging.getLogger(__name__)
+BIND_ATTEMPTS, BIND_RETRY_S = 50, 0.02  # a box started again on its endpoint waits for the port
 
 
 @dataclasses.dataclass
@@ -27,6 +31,14 @@ class BoxCounts:
     frames: int = 0
     detected: int = 0
     people: int = 0
+
+    def add(self, people: list[Person] | None) -> None:
+        self.frames += 1
+        self.detected += people is not None
+        self.people += len(people or [])
+
+    def __add__(self, other: BoxCounts) -> BoxCounts:
+        return BoxCounts(self.frames + other.frames, self.detected + other.detected, self.people + other.people)
 
 
 def keypoint_frame(camera: str, frame: Frame, people: list[Person] | None, layout: str,
@@ -50,30 +62,43 @@ def detections(frames: Iterable[Frame], tracker: Tracker, camera: str,
         yield frame, people
 
 
+def bind(endpoint: str) -> zmq.Socket:
+    """The box's publisher; the port of a box that ran before in this process is released
+    by ZeroMQ shortly after its socket closed, so binding is retried for a second."""
+    context = zmq.Context.instance()
+    for _ in range(BIND_ATTEMPTS - 1):
+        try:
+            return transport.publisher(context, endpoint)
+        except zmq.ZMQError as e:
+            log.debug("cannot bind %s yet (%s): retrying", endpoint, e)
+            time.sleep(BIND_RETRY_S)
+    return transport.publisher(context, endpoint)
+
+
+def paired(frames: Iterable[Frame], pairing: TriggerPairing | None, exposure_mid_ns: int) -> Iterable[Frame]:
+    """The frames with their trigger edge's time (moved to mid-exposure) and count, if paired."""
+    if pairing is None:
+        return frames
+    return (dataclasses.replace(f, capture_time_ns=f.capture_time_ns + exposure_mid_ns) for f in pairing.pair(frames))
+
+
 def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple[int, int] = (1, 1),
-        pairing: TriggerPairing | None = None, realtime: bool = False, model=None,
+        pairing: TriggerPairing | None = None, realtime: bool = False, model: Detector | None = None,
         max_people: int = 2, exposure_mid_ns: int = 0) -> BoxCounts:
     """Publishes every frame of `frames` (paired with trigger edges when given). realtime:
     a file source is played at its capture times instead of as fast as detection runs.
-    model: BlazePose (default) or a TopDownModel. exposure_mid_ns: from the trigger edge
-    (which a paired frame's time is) to the middle of the exposure, the time KeypointFrame
-    names — the sensor's trigger delay plus half the exposure."""
-    tracker = Tracker(model or BlazePose(), max_people=max_people)
-    socket = transport.publisher(zmq.Context.instance(), endpoint)
-    counts = BoxCounts()
-    source = frames
-    if pairing:
-        source = (dataclasses.replace(f, capture_time_ns=f.capture_time_ns + exposure_mid_ns)
-                  for f in pairing.pair(frames))
+    model: any Detector (default BlazePose). exposure_mid_ns: from the trigger edge (which
+    a paired frame's time is) to the middle of the exposure, the time KeypointFrame names —
+    the sensor's trigger delay plus half the exposure."""
+    tracker = Tracker(model or open_detector("blazepose"), max_people=max_people)
+    socket, counts = bind(endpoint), BoxCounts()
     try:
-        for frame, people in detections(source, tracker, camera, detect_every):
+        for frame, people in detections(paired(frames, pairing, exposure_mid_ns), tracker, camera, detect_every):
             if realtime:
                 pacing.sleep_until(frame.capture_time_ns)
             msg = keypoint_frame(camera, frame, people, tracker.model.layout.name, send_time_ns=time.time_ns())
             socket.send_multipart(wire.encode(msg))
-            counts.frames += 1
-            counts.detected += people is not None
-            counts.people += len(people or [])
+            counts.add(people)
     finally:
         socket.close(linger=1000)
     return counts

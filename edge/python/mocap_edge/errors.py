@@ -3,6 +3,8 @@
     EdgeError            base: catch this at the command line and print the message
     ├── SourceError      a frame source cannot be opened (unknown scheme, bad option,
     │                    missing file, device or Python module)
+    ├── ModelError       a keypoint model cannot be opened (unknown name, bad option,
+    │                    configuration or stream file)
     └── TriggerError     the trigger line cannot be requested (no GPIO chip, no gpiod,
                          line busy)
 
@@ -16,6 +18,10 @@ class EdgeError(Exception):
 
 
 class SourceError(EdgeError):
+    pass
+
+
+class ModelError(EdgeError):
     pass
 
 

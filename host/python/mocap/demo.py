@@ -57,7 +57,8 @@ def report(result: dict, seconds: float, studio: live.Studio) -> str:
         f"Simulated studio: Pose2Sim's Balancing trial (PyPI pose2sim 0.4.15, BSD-3) fitted to the skeleton and "
         f"looped to {seconds:.0f} s; {len(studio.camera_ids)} cameras at 60 fps (simulated detector errors), "
         f"13 IMUs at {live.IMU_RATE:.0f} Hz (simulated sensor errors); played in real time by one "
-        "process per camera and an IMU hub over ZeroMQ on loopback; solved live by mocapd.", "",
+        "camera box per camera (the real box on the simulated backend) and an IMU hub over ZeroMQ on loopback; "
+        "solved live by mocapd.", "",
         calibration_line(studio, result), "",
         "| figure | value |", "|---|---|",
         f"| frames captured | {result['frames']} |",
@@ -83,7 +84,7 @@ def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record
     if vmc:
         host, _, port = vmc.partition(":")
         sender = VmcSender(studio.session_skeleton, host=host or "127.0.0.1", port=int(port or 39539))
-    print(f"mocap demo: starting mocapd and {len(studio.camera_ids)} cameras + an IMU hub", file=sys.stderr)
+    print(f"mocap demo: starting mocapd and {len(studio.camera_ids)} camera boxes + an IMU hub", file=sys.stderr)
     run_ = live.play(studio, progress=_progress,
                      on_pose=(lambda p: sender.send(list(p.theta), p.capture_time_ns * 1e-9)) if sender else None,
                      record=Path(record) if record else None)

@@ -1,6 +1,8 @@
 """The running system on one machine: the simulated studio played in real time by edge
-processes (one per camera, one IMU hub) over ZeroMQ on loopback, the C++ host `mocapd`
-solving live, and a consumer collecting PoseFrame and Health (progress, outputs, report).
+processes over ZeroMQ on loopback — one camera box per camera (`python -m mocap_edge camera
+--source sim:STREAMS`: the box's own loop on the simulated backend) and the IMU hub — the
+C++ host `mocapd` solving live, and a consumer collecting PoseFrame and Health (progress,
+outputs, report).
 
 `mocap demo` and the live benchmark are this with different lengths and outputs.
 """
@@ -44,6 +46,7 @@ class Studio:
     session_skeleton: _core.Skeleton  # the session's: estimated, the truth's (oracle), the default's (live)
     calibration: str  # "estimated", "oracle" or "live"
     calibrator: str | None = None  # live: the calibrator's endpoint (its sessions in `calibrated`)
+    detect_every: tuple[int, int] = (1, 1)  # the cameras' (period, burst): high-speed mode when period > 1
 
     @property
     def calibrated(self) -> Path:
@@ -131,7 +134,21 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     (folder / "session.json").write_text(json.dumps(session, indent=1))
     return Studio(folder / "session.json", folder / "streams.npz", skeleton, thetas, t.times, camera_ids,
                   {k: v for k, v in endpoints.items() if k != "calibrator"}, session_skeleton, calibration,
-                  endpoints["calibrator"] if calibration == "live" else None)
+                  endpoints["calibrator"] if calibration == "live" else None,
+                  (sim_take.PRESETS[preset].period, sim_take.PRESETS[preset].burst))
+
+
+def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple | None = None) -> list[str]:
+    """The camera box of camera c on the simulated backend (its detection latency seeded by
+    c); unplugged (camera id, from_s, to_s): that box is unplugged during the span."""
+    camera = studio.camera_ids[c]
+    cmd = [sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{studio.streams}", "--camera", camera,
+           "--bind", studio.endpoints[camera], "--start-ns", str(start_ns), "--seed", str(c)]
+    if studio.detect_every[0] > 1:
+        cmd += ["--hs", *map(str, studio.detect_every)]
+    if unplugged and unplugged[0] == camera:
+        cmd += ["--stop", *map(str, unplugged[1:])]
+    return cmd
 
 
 @dataclasses.dataclass
@@ -153,13 +170,8 @@ def play(studio: Studio, progress=None, faults: dict | None = None, on_pose=None
     start_ns = time.time_ns() + int(LEAD_S * 1e9)
     host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
                              "--quiet"], stdout=subprocess.PIPE, text=True)
-    edge = []
-    for c, cam in enumerate(studio.camera_ids):
-        cmd = [sys.executable, "-m", "mocap_edge", "camera", "--streams", str(studio.streams), "--camera", cam,
-               "--bind", studio.endpoints[cam], "--start-ns", str(start_ns), "--seed", str(c)]
-        if faults.get("camera", (None,))[0] == cam:
-            cmd += ["--stop", *map(str, faults["camera"][1:])]
-        edge.append(subprocess.Popen(cmd))
+    edge = [subprocess.Popen(camera_box_command(studio, c, start_ns, faults.get("camera")))
+            for c in range(len(studio.camera_ids))]
     cmd = [sys.executable, "-m", "mocap_edge", "imu-hub", "--streams", str(studio.streams),
            "--bind", studio.endpoints["hub0"], "--start-ns", str(start_ns)]
     if "imu" in faults:

@@ -11,51 +11,41 @@ same two points for tracking. Crops: side 2 x that distance x 1.25, "up" along i
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
-import onnxruntime as ort
 
 from mocap_edge.detect import anchors, decoders, layouts, roi
+from mocap_edge.detect.base import Crop, Detector, Person
+from mocap_edge.detect.onnx import OnnxNetwork
 
 MODELS = Path(__file__).resolve().parents[3] / "models" / "blazepose"
 DETECTOR_SIZE, LANDMARK_SIZE = 224, 256
 KEYPOINTS = 33  # plus 2 auxiliary (tracking) landmarks in the model's 39 x 5 output
 OUTPUTS = ["Identity", "Identity_1", "Identity_3"]  # landmarks, pose flag, heatmap (64 x 64 x 39)
 
+__all__ = ["BlazePose", "Person"]
 
 
-@dataclasses.dataclass
-class Person:
-    keypoints: np.ndarray  # (K, 3) image pixels x, y and confidence, in the model's layout
-    presence: float  # the landmark model's pose flag: a person is in the crop
-    next_roi: roi.Roi  # where to look in the next frame
+class BlazePose(Detector):
+    """models: the folder of the two ONNX files (default edge/models/blazepose).
+    min_detection: the person detector's score threshold; min_presence: the landmark
+    model's pose flag below which a tracked person is lost."""
 
-
-def onnx_session(path: Path, threads: int) -> ort.InferenceSession:
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = threads
-    options.inter_op_num_threads = 1
-    return ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
-
-
-class BlazePose:
-    def __init__(self, models: Path = MODELS, threads: int = 2, min_detection: float = 0.5):
-        self.detector = onnx_session(models / "pose_detection.onnx", threads)
-        self.landmarker = onnx_session(models / "pose_landmark_full.onnx", threads)
+    def __init__(self, models: str | Path = "", threads: int = 2, min_detection: float = 0.5,
+                 min_presence: float = 0.5) -> None:
+        super().__init__(layouts.load("blazepose33"), min_presence)
+        folder = Path(models) if models else MODELS
+        self.detector = OnnxNetwork(folder / "pose_detection.onnx", threads)
+        self.landmarker = OnnxNetwork(folder / "pose_landmark_full.onnx", threads)
         self.anchors = anchors.ssd_anchors()
-        self.layout = layouts.load("blazepose33")
         self.min_detection = min_detection
-        self._landmark_input = self.landmarker.get_inputs()[0].name
-        batch = self.landmarker.get_inputs()[0].shape[0]
-        self.batchable = not isinstance(batch, int) or batch != 1  # a symbolic batch dimension
 
     def detect(self, image: np.ndarray) -> list[roi.Roi]:
         """Crops around the people in an RGB image (the full-image person detector)."""
         box = roi.letterbox(image.shape[1], image.shape[0])
         x = box.crop(image, DETECTOR_SIZE).astype(np.float32)[None] / 127.5 - 1.0
-        raw_boxes, raw_scores = self.detector.run(["Identity", "Identity_1"], {self.detector.get_inputs()[0].name: x})
+        raw_boxes, raw_scores = self.detector.run(x, ["Identity", "Identity_1"])
         found = decoders.weighted_nms(decoders.decode_ssd(raw_boxes[0], raw_scores[0], self.anchors, DETECTOR_SIZE,
                                                           self.min_detection))
         out = []
@@ -64,25 +54,20 @@ class BlazePose:
             out.append(roi.aligned(kp[0], kp[1]))
         return out
 
-    def landmarks(self, crops: list[tuple[np.ndarray, roi.Roi]]) -> list[Person]:
-        """People from (image, region) pairs — regions of any images, packed into one
-        inference (the model's batch dimension is symbolic: edge/models/blazepose/README.md).
-        Landmarks are refined from the heatmap as MediaPipe does."""
-        if not crops:
-            return []
+    def _landmarks(self, crops: list[Crop]) -> list[Person]:
+        """Packed into one inference (the model's batch dimension is symbolic:
+        edge/models/blazepose/README.md); landmarks refined from the heatmap as MediaPipe does."""
         x = np.stack([r.crop(image, LANDMARK_SIZE) for image, r in crops]).astype(np.float32) / 255.0
-        if self.batchable:
-            runs = [self.landmarker.run(OUTPUTS, {self._landmark_input: x})]
-        else:
-            runs = [self.landmarker.run(OUTPUTS, {self._landmark_input: x[i:i + 1]}) for i in range(len(x))]
-        raw, flags, heatmaps = (np.concatenate([r[k] for r in runs]) for k in range(3))
-        people = []
-        for (_, region), r, flag, heatmap in zip(crops, raw, flags, heatmaps):
-            lm = r.reshape(39, 5).astype(np.float64)
-            lm[:KEYPOINTS, :2] = decoders.refine_from_heatmaps(lm[:KEYPOINTS, :2], heatmap, LANDMARK_SIZE / heatmap.shape[0])
-            kp = decoders.decode_regression(lm.reshape(-1), 39)
-            xy = region.to_image(kp[:, :2], LANDMARK_SIZE)
-            people.append(Person(np.column_stack([xy[:KEYPOINTS], kp[:KEYPOINTS, 2]]),
-                                 float(np.asarray(flag).reshape(-1)[0]),  # a probability already
-                                 roi.aligned(xy[33], xy[34])))
-        return people
+        raw, flags, heatmaps = self.landmarker.run(x, OUTPUTS)
+        return [_person(region, r, flag, heatmap) for (_, region), r, flag, heatmap in zip(crops, raw, flags, heatmaps)]
+
+
+def _person(region: roi.Roi, raw: np.ndarray, flag: np.ndarray, heatmap: np.ndarray) -> Person:
+    """A person from one crop's outputs: 39 landmarks x 5, the pose flag, the heatmap."""
+    lm = raw.reshape(39, 5).astype(np.float64)
+    lm[:KEYPOINTS, :2] = decoders.refine_from_heatmaps(lm[:KEYPOINTS, :2], heatmap, LANDMARK_SIZE / heatmap.shape[0])
+    kp = decoders.decode_regression(lm.reshape(-1), 39)
+    xy = region.to_image(kp[:, :2], LANDMARK_SIZE)
+    return Person(np.column_stack([xy[:KEYPOINTS], kp[:KEYPOINTS, 2]]),
+                  float(np.asarray(flag).reshape(-1)[0]),  # a probability already
+                  roi.aligned(xy[33], xy[34]))

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import cv2
 import numpy as np
 
 
@@ -44,6 +43,8 @@ class Roi:
 
     def crop(self, image: np.ndarray, crop_size: int | tuple[int, int]) -> np.ndarray:
         """The region resampled to the crop size (bilinear, zero outside the image)."""
+        import cv2  # here, not at the top: a simulated box never crops and starts without OpenCV
+
         wh, sides = self.extent(crop_size)
         a = self.axes() * (sides / wh)  # column j scaled by image pixels per crop pixel along it
         # crop index (i, j) -> image index: continuous coords are index + 0.5 on both sides.

@@ -10,8 +10,8 @@ Configuration (JSON): {"format": "mocap.edge-model/1", "onnx": path (relative to
   "channels_first": bool, "rgb": bool, "mean": [3], "std": [3] (pixel values 0-255; input =
   (pixel - mean) / std), "decoder": "regression" | "heatmap" | "simcc",
   "values_per_keypoint": 5 (regression), "split_ratio": 2.0 (simcc), "padding": 1.25,
-  "min_presence": mean confidence of a tracked person, default 0.3}
-`load_model("blazepose")` is the built-in default.
+  "min_presence": 0.3 (a tracked person whose mean keypoint confidence is below it is lost)}
+Opened as `open_detector("topdown:model.json")` (or the bare path; detect/base.py).
 """
 
 from __future__ import annotations
@@ -23,8 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from mocap_edge.detect import decoders, layouts, roi
-from mocap_edge.detect.blazepose import BlazePose, Person, onnx_session
-from mocap_edge.errors import EdgeError
+from mocap_edge.detect.base import Crop, Detector, Person
+from mocap_edge.detect.blazepose import BlazePose
+from mocap_edge.detect.onnx import OnnxNetwork
+from mocap_edge.errors import ModelError
+
+__all__ = ["ModelConfig", "TopDownModel", "from_config"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,6 +44,7 @@ class ModelConfig:
     values_per_keypoint: int = 3
     split_ratio: float = 2.0
     padding: float = 1.25
+    min_presence: float = 0.3
 
     @staticmethod
     def load(path: Path) -> ModelConfig:
@@ -47,47 +52,43 @@ class ModelConfig:
             data = json.loads(Path(path).read_text())
             if data.pop("format", None) != "mocap.edge-model/1":
                 raise ValueError("format is not mocap.edge-model/1")
-            data.pop("min_presence", None)
             data["onnx"] = Path(path).parent / data["onnx"]
             data["input"] = tuple(data["input"])
             config = ModelConfig(**data)
         except (OSError, ValueError, TypeError, KeyError) as e:
-            raise EdgeError(f"{path}: not a model configuration ({e})") from None
+            raise ModelError(f"{path}: not a model configuration ({e})") from None
         if config.decoder not in ("regression", "heatmap", "simcc"):
-            raise EdgeError(f"{path}: unknown decoder {config.decoder!r}")
+            raise ModelError(f"{path}: unknown decoder {config.decoder!r}")
         return config
 
 
-class TopDownModel:
-    def __init__(self, config: ModelConfig, threads: int = 2, people: BlazePose | None = None):
+class TopDownModel(Detector):
+    """people: the person detector (default BlazePose's; any Detector's `detect`)."""
+
+    def __init__(self, config: ModelConfig, threads: int = 2, people: Detector | None = None) -> None:
+        super().__init__(layouts.load(config.layout), config.min_presence)
         self.config = config
-        self.layout = layouts.load(config.layout)
-        self.session = onnx_session(config.onnx, threads)
+        self.network = OnnxNetwork(config.onnx, threads)
         self.people = people or BlazePose(threads=threads)
-        self.batchable = not isinstance(self.session.get_inputs()[0].shape[0], int)
 
     def detect(self, image: np.ndarray) -> list[roi.Roi]:
         return self.people.detect(image)
 
-    def landmarks(self, crops: list[tuple[np.ndarray, roi.Roi]]) -> list[Person]:
-        if not crops:
-            return []
+    def _landmarks(self, crops: list[Crop]) -> list[Person]:
+        outputs = self.network.run(self._input(crops))
+        return [self._person(region, [o[i] for o in outputs]) for i, (_, region) in enumerate(crops)]
+
+    def _input(self, crops: list[Crop]) -> np.ndarray:
+        """The crops as the network's input batch: resampled, normalised, channels ordered."""
         c = self.config
         x = np.stack([r.crop(image if c.rgb else image[..., ::-1], c.input) for image, r in crops]).astype(np.float32)
         x = (x - np.float32(c.mean)) / np.float32(c.std)
-        if c.channels_first:
-            x = x.transpose(0, 3, 1, 2)
-        name = self.session.get_inputs()[0].name
-        runs = [self.session.run(None, {name: x})] if self.batchable else [
-            self.session.run(None, {name: x[i:i + 1]}) for i in range(len(x))]
-        outputs = [np.concatenate([r[k] for r in runs]) for k in range(len(runs[0]))]
-        people = []
-        for i, (_, region) in enumerate(crops):
-            kp = self._decode([o[i] for o in outputs])
-            xy = region.to_image(kp[:, :2], c.input)
-            keypoints = np.column_stack([xy, kp[:, 2]])
-            people.append(Person(keypoints, float(kp[:, 2].mean()), self._next_region(region, kp)))
-        return people
+        return x.transpose(0, 3, 1, 2) if c.channels_first else x
+
+    def _person(self, region: roi.Roi, outputs: list[np.ndarray]) -> Person:
+        kp = self._decode(outputs)
+        xy = region.to_image(kp[:, :2], self.config.input)
+        return Person(np.column_stack([xy, kp[:, 2]]), float(kp[:, 2].mean()), self._next_region(region, kp))
 
     def _decode(self, outputs: list[np.ndarray]) -> np.ndarray:
         c, k = self.config, len(self.layout)
@@ -112,10 +113,6 @@ class TopDownModel:
         return roi.Roi(centre, float(size), region.rotation)
 
 
-def load_model(spec: str = "blazepose", threads: int = 2):
-    """"blazepose" (the default, BlazePose's own landmark model and tracking) or the path of
-    a model configuration (module docstring)."""
-    if spec == "blazepose":
-        return BlazePose(threads=threads)
-    return TopDownModel(ModelConfig.load(Path(spec)), threads)
-
+def from_config(path: str, threads: int = 2) -> TopDownModel:
+    """The model a configuration file (module docstring) describes."""
+    return TopDownModel(ModelConfig.load(Path(path)), threads)

@@ -6,16 +6,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from mocap_edge.detect import openpose_json
-from mocap_edge.detect.topdown import load_model
+from mocap_edge.detect.base import open_detector
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import open_source
 
 
 def detect_video(video: Path, out: Path, max_people: int = 2, model: str = "blazepose") -> dict:
     """Writes out/<stem>_<frame>_keypoints.json for every frame; returns counts. model:
-    "blazepose" or a model configuration file (topdown.py)."""
+    a model's name (detect/base.py): "blazepose" or a model configuration file (topdown.py)."""
     out.mkdir(parents=True, exist_ok=True)
-    tracker = Tracker(load_model(model), max_people=max_people)
+    tracker = Tracker(open_detector(model), max_people=max_people)
     frames = people = 0
     with open_source(f"video:{video}") as source:
         for frame in source:

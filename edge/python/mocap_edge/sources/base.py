@@ -11,12 +11,12 @@ from __future__ import annotations
 import abc
 import dataclasses
 import importlib
-import inspect
 from collections.abc import Iterator
 from types import ModuleType, TracebackType
 
 import numpy as np
 
+from mocap_edge import registry
 from mocap_edge.errors import SourceError
 
 # scheme -> "module:class"; imported only when opened, so a box needs only its backend's modules
@@ -26,6 +26,7 @@ BACKENDS: dict[str, str] = {
     "v4l2": "mocap_edge.sources.v4l2:V4l2Source",
     "libcamera": "mocap_edge.sources.pi_camera:LibcameraSource",
     "fake": "mocap_edge.sources.fake:FakeSource",
+    "sim": "mocap_edge.sources.sim:SimulatedSource",
 }
 
 
@@ -76,18 +77,11 @@ class FrameSource(abc.ABC):
 
 def open_source(uri: str, **options: object) -> FrameSource:
     """Opens `scheme:location` (video:PATH, images:DIR, v4l2:/dev/videoN, libcamera:N,
-    fake:) with the backend's keyword options; raises SourceError with the reason."""
-    scheme, colon, location = uri.partition(":")
+    fake:, sim:STREAMS) with the backend's keyword options; raises SourceError with the reason."""
+    scheme, colon, _ = uri.partition(":")
     if not colon or scheme not in BACKENDS:
-        known = ", ".join(f"{s}:" for s in BACKENDS)
-        raise SourceError(f"unknown frame source {uri!r}: the URI must start with one of {known}")
-    module_name, _, class_name = BACKENDS[scheme].partition(":")
-    backend = getattr(importlib.import_module(module_name), class_name)
-    try:
-        inspect.signature(backend).bind(location, **options)
-    except TypeError as e:
-        raise SourceError(f"{scheme}: source options: {e}") from None
-    return backend(location, **options)
+        raise SourceError(f"unknown frame source {uri!r}: the URI must start with one of {registry.known(BACKENDS)}")
+    return registry.open_backend(BACKENDS, uri, SourceError, "source", **options)
 
 
 def require_module(name: str, scheme: str, hint: str) -> ModuleType:

@@ -1,4 +1,4 @@
-"""An in-process camera for tests of the camera node: `count` synthetic frames at `fps`
+"""An in-process camera for tests of the camera box: `count` synthetic frames at `fps`
 from `start_ns`, the same for the same options. Frame k shows a grey gradient with a
 red square whose left edge is at x = (step * k) mod (width - square), so a test can
 tell frames apart and check their order and colour channels."""
