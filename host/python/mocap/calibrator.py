@@ -27,11 +27,13 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+import ctypes
 from concurrent.futures.process import BrokenProcessPool
 import dataclasses
 import json
 import logging
 import os
+import signal
 import threading
 import time
 from pathlib import Path
@@ -97,15 +99,28 @@ def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float, q
     return calibrate.estimate(messages, Path(session), seconds, "the live streams", quick=quick)
 
 
-def _low_priority() -> None:
+PR_SET_PDEATHSIG = 1  # prctl(2): the signal a process gets when its parent dies
+
+
+def _worker_start(parent_pid: int) -> None:
+    """In the worker: low priority, and ended with its parent. A forked worker outlives a
+    killed parent otherwise (blocked on a pipe it holds both ends of)."""
     os.nice(10)
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(0)
+
+
+def _start_worker() -> concurrent.futures.ProcessPoolExecutor:
+    return concurrent.futures.ProcessPoolExecutor(1, initializer=_worker_start, initargs=(os.getpid(),))
 
 
 class WorkerPool:
     """The calibrator's worker: one low-priority process, replaced when it died (killed, out
     of memory): the job it ran fails (logged), the next one runs in a new process."""
 
-    def __init__(self, start=lambda: concurrent.futures.ProcessPoolExecutor(1, initializer=_low_priority)):
+    def __init__(self, start=_start_worker):
         self.start = start
         self.pool = start()
 

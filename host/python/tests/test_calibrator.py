@@ -132,3 +132,42 @@ def test_a_worker_that_died_is_replaced():
         with pytest.raises(concurrent.futures.process.BrokenProcessPool):
             pool.submit(os._exit, 1).result(timeout=30)
         assert pool.submit(pow, 2, 10).result(timeout=30) == 1024
+
+
+def test_the_worker_ends_with_a_killed_calibrator(tmp_path):
+    """A calibrator stopped hard (SIGKILL, a crashed box) leaves no worker process behind."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    # Fixture: a calibrator process whose worker writes its pid, then idles.
+    pid_file = tmp_path / "worker.pid"
+    script = ("import os, time\nfrom mocap import calibrator\n"
+              f"def job():\n    open({str(pid_file)!r}, 'w').write(str(os.getpid()))\n    time.sleep(60)\n"
+              "with calibrator.WorkerPool() as pool:\n    pool.submit(job)\n    time.sleep(60)\n")
+    parent = subprocess.Popen([sys.executable, "-c", script])
+    try:
+        deadline = time.monotonic() + 30
+        while not pid_file.is_file() or not pid_file.read_text():
+            assert time.monotonic() < deadline, "the worker never started"
+            time.sleep(0.05)
+        worker = int(pid_file.read_text())
+        # Test: the calibrator is killed without a chance to clean up.
+        parent.send_signal(signal.SIGKILL)
+        parent.wait(timeout=10)
+        # Assert: its worker is gone too.
+        deadline = time.monotonic() + 10
+        while _alive(worker) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _alive(worker)
+    finally:
+        parent.kill()
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().split(")")[-1].split()[0] != "Z"  # a zombie has ended
+    except FileNotFoundError:
+        return False
