@@ -31,5 +31,5 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
 .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
-.venv/bin/python -m mocap.demo_data  # the demo's motion (PyPI pose2sim) into .cache/
+.venv/bin/python -m mocap.io.demo_data  # the demo's motion (PyPI pose2sim) into .cache/
 echo "setup: done"

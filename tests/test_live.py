@@ -15,24 +15,30 @@ import numpy as np
 import pytest
 import zmq
 
-from mocap import _core, bvh, live, offline, recording, transport, wire
-from mocap.calibration import informative
+from mocap import _core
+from mocap.calibration import from_messages, from_recording, informative
+from mocap.demo import play, score, studio as live_studio
 from mocap.errors import InputError
+from mocap.eval import metrics
+from mocap.io import bvh
+from mocap.io.session import Session
+from mocap.net import transport, wire
+from mocap.recording import offline, reader, recorder, replay
 
-pytestmark = pytest.mark.skipif(not live.MOCAPD.exists(), reason="mocapd is not built (make build)")
+pytestmark = pytest.mark.skipif(not play.MOCAPD.exists(), reason="mocapd is not built (make build)")
 
 
 @pytest.fixture(scope="module")
 def studio(tmp_path_factory):
-    return live.prepare(tmp_path_factory.mktemp("live"), seconds=6.0, seed=1)
+    return live_studio.prepare(tmp_path_factory.mktemp("live"), seconds=6.0, seed=1)
 
 
 def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path):
-    run = live.play(studio, faults={"camera": ("cam3", 2.0, 3.5), "imu": ("lower_back", 2.0, 3.5)},
+    run = play.play(studio, faults={"camera": ("cam3", 2.0, 3.5), "imu": ("lower_back", 2.0, 3.5)},
                     record=tmp_path / "take.mcap")
-    result = live.score(studio, run)
+    result = score.score(studio, run)
     assert result["dropped"] == 0, result
-    # The session's calibration is estimated from the streams' first 5 s (live.calibrate);
+    # The session's calibration is estimated from the streams' first 5 s (mocap.demo.studio.calibrate);
     # measured 2.3 cm at the joint centres over 20 s (`mocap demo`).
     assert result["joint_centres_pos_cm"] < 3.5, result
     t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
@@ -67,7 +73,7 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
 def test_garbage_on_the_wire_is_counted_and_dropped(studio):
     context = zmq.Context.instance()
     junk = transport.publisher(context, studio.endpoints["cam0"])  # a broken box on cam0's endpoint
-    host = subprocess.Popen([str(live.MOCAPD), str(studio.session), "--duration", "3", "--quiet"],
+    host = subprocess.Popen([str(play.MOCAPD), str(studio.session), "--duration", "3", "--quiet"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     sub = transport.subscriber(context, [studio.endpoints["host"]])
     try:
@@ -120,24 +126,22 @@ def test_the_demo_command_writes_a_bvh_a_csv_and_a_report(tmp_path):
 
 
 def test_a_recording_without_a_session_says_so(tmp_path):
-    with recording.Recorder(tmp_path / "bare.mcap") as r:
+    with recorder.Recorder(tmp_path / "bare.mcap") as r:
         r.write(wire.encode(wire.KeypointFrame(camera_id="cam0")), 1)
     with pytest.raises(InputError, match="no session is attached"):
         offline.solve_recording(tmp_path / "bare.mcap")
 
 
 def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_poses_back(tmp_path):
-    import json as json_
+    import dataclasses
     import threading
 
-    studio = live.prepare(tmp_path / "studio", seconds=3.0, seed=2)
-    first = live.play(studio, record=tmp_path / "take.mcap")
-    session = json_.loads(studio.session.read_text())
-    replay_endpoint, output = (f"tcp://127.0.0.1:{p}" for p in live.free_ports(2))
-    session |= {"inputs": [replay_endpoint], "output": output}
-    replay_session = studio.session.with_name("replay.json")
-    replay_session.write_text(json_.dumps(session))
-    host = subprocess.Popen([str(live.MOCAPD), str(replay_session), "--duration", "9", "--quiet"],
+    studio = live_studio.prepare(tmp_path / "studio", seconds=3.0, seed=2)
+    first = play.play(studio, record=tmp_path / "take.mcap")
+    replay_endpoint, output = (f"tcp://127.0.0.1:{p}" for p in live_studio.free_ports(2))
+    session = dataclasses.replace(Session.load(studio.session), inputs=[replay_endpoint], output=output)
+    replay_session = session.save(studio.session.with_name("replay.json"))
+    host = subprocess.Popen([str(play.MOCAPD), str(replay_session), "--duration", "9", "--quiet"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     sub = transport.subscriber(zmq.Context.instance(), [output])
     poses = []
@@ -152,7 +156,7 @@ def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_po
     thread = threading.Thread(target=collect)
     thread.start()
     time.sleep(1.0)  # mocapd connects to the replay's endpoint
-    sent = recording.replay(tmp_path / "take.mcap", replay_endpoint, speed=1.0, restamp=True)
+    sent = replay.replay(tmp_path / "take.mcap", replay_endpoint, speed=1.0, restamp=True)
     host.communicate(timeout=30)
     thread.join(timeout=10)
     sub.close()
@@ -160,20 +164,19 @@ def test_a_recording_replayed_in_real_time_through_a_live_host_gives_the_live_po
     # Same inputs, same relative timing, times moved to now: the same frames, solved as well
     # (not bit for bit: which inputs a frame waits for depends on the timing of the moment).
     assert len(poses) >= 0.98 * len(first.poses)
-    from mocap import eval as evaluation
 
     n = min(len(poses), len(studio.truth))
     replayed = np.array([p.theta for p in sorted(poses, key=lambda p: p.capture_time_ns)[:n]])
-    error = evaluation.errors(studio.skeleton, studio.truth[:n], replayed, 1 / 60, studio.session_skeleton)["pos_error_cm"]
-    assert error < 1.2 * live.score(studio, first)["pos_error_cm"] + 0.2, error
+    error = metrics.errors(studio.skeleton, studio.truth[:n], replayed, 1 / 60, studio.session_skeleton)["pos_error_cm"]
+    assert error < 1.2 * score.score(studio, first)["pos_error_cm"] + 0.2, error
 
 
 @pytest.fixture(scope="module")
 def oracle_take(tmp_path_factory):
     """A studio with the oracle session, played live and recorded (7 s, seed 3)."""
     folder = tmp_path_factory.mktemp("oracle_studio")
-    studio = live.prepare(folder / "studio", seconds=7.0, seed=3, calibration="oracle")
-    run = live.play(studio, record=folder / "take.mcap")
+    studio = live_studio.prepare(folder / "studio", seconds=7.0, seed=3, calibration="oracle")
+    run = play.play(studio, record=folder / "take.mcap")
     return studio, run, folder / "take.mcap"
 
 
@@ -181,11 +184,10 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(or
     """A studio with the oracle session records its first seconds; `mocap calibrate` makes a
     session from the recording alone; the recording solved with that session lands near the
     oracle's live result."""
-    from mocap import calibrate, cli
-    from mocap import eval as evaluation
+    from mocap import cli
 
     studio, run, take = oracle_take
-    oracle = live.score(studio, run)
+    oracle = score.score(studio, run)
     assert cli.main(["calibrate", "--recording", str(take), "--out", str(tmp_path / "cal")]) == 0
     report = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert len(report["imus_calibrated"]) == 13 and not report["imus_missing"]
@@ -197,26 +199,24 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(or
     matched = [f for f, t in enumerate(frame_ns) if t in by_time]
     assert len(matched) >= 0.98 * len(frame_ns)
     solved = np.array([by_time[frame_ns[f]] for f in matched])
-    e = evaluation.errors(studio.skeleton, studio.truth[matched], solved, 1 / 60, calibrated)
+    e = metrics.errors(studio.skeleton, studio.truth[matched], solved, 1 / 60, calibrated)
     # Measured (7 s, seed 3): joint centres 2.02 cm with the calibrated session, 1.16 cm with
     # the oracle's (the balancing motion calibrates worse than the test clips: docs/calibration.md).
     assert e["joint_centres_pos_cm"] < min(2.5, 2.0 * oracle["joint_centres_pos_cm"]), (e, oracle)
     with pytest.raises(InputError, match="no session is attached"):
         bare = tmp_path / "bare.mcap"
-        with recording.Recorder(bare) as r:
+        with recorder.Recorder(bare) as r:
             r.write(wire.encode(wire.KeypointFrame(camera_id="cam0")), 1)
-        calibrate.calibrate(bare, tmp_path / "none")
+        from_recording.calibrate(bare, tmp_path / "none")
 
 
 def test_without_imu_messages_the_calibration_is_the_skeleton_from_video(oracle_take):
     """What the live calibrator publishes when no IMU sends (a video-only studio, or a hub
     that is late): the skeleton and keypoint sites, and no IMU site — mocapd then keeps
     solving from video alone."""
-    from mocap import calibrate
-
     studio, _, take = oracle_take
-    cameras_only = [(m.type_name, m.payload) for m in recording.read(take) if m.topic.startswith("/camera/")]
-    estimated = calibrate.estimate(cameras_only, studio.session, 5.0, "cameras only")
+    cameras_only = [(m.type_name, m.payload) for m in reader.read(take) if m.topic.startswith("/camera/")]
+    estimated = from_messages.estimate(cameras_only, studio.session, 5.0, "cameras only")
     assert json.loads(estimated.imus_json)["imus"] == [] and len(estimated.report["imus_missing"]) == 13
     assert estimated.report["window_motion_score_deg"] is None
     lengths = np.linalg.norm(_core.Skeleton.from_json(estimated.skeleton_json).offsets, axis=1)
@@ -230,32 +230,32 @@ def test_calibrate_connect_records_the_live_streams_then_calibrates(oracle_take,
     recorded for the window and calibrated, as from the recording itself."""
     import threading
 
-    from mocap import calibrate, cli
+    from mocap import cli
 
     studio, _, take = oracle_take
-    endpoint = f"tcp://127.0.0.1:{live.free_ports(1)[0]}"
+    endpoint = f"tcp://127.0.0.1:{live_studio.free_ports(1)[0]}"
     out = tmp_path / "cal"
     result = {}
     worker = threading.Thread(target=lambda: result.update(code=cli.main(
         ["calibrate", "--connect", endpoint, "--session", str(studio.session), "--out", str(out)])))
     worker.start()
     time.sleep(0.5)  # the recorder connects; the replay binds
-    recording.replay(take, endpoint, speed=1.0, restamp=True)
+    replay.replay(take, endpoint, speed=1.0, restamp=True)
     worker.join(timeout=120)
     assert result.get("code") == 0
     assert (out / "calibration.mcap").is_file()
     report = json.loads((out / "calibration.json").read_text())
     assert len(report["imus_calibrated"]) == 13 and report["window"]["frames"] > 100
-    session = json.loads((out / "session.json").read_text())
-    assert session["solver"]["heading_time_constant"] > 0  # the window's headings are tracked
+    session = Session.load(out / "session.json")
+    assert session.solver_options().heading_time_constant > 0  # the window's headings are tracked
     from_file = tmp_path / "from_file"
-    calibrate.calibrate(take, from_file, studio.session)
+    from_recording.calibrate(take, from_file, studio.session)
     live_lengths = np.linalg.norm(_core.Skeleton.load(str(out / "skeleton.json")).offsets, axis=1)
     file_lengths = np.linalg.norm(_core.Skeleton.load(str(from_file / "skeleton.json")).offsets, axis=1)
     # The same streams (the live recording may miss the first few messages): the same skeleton.
     assert np.abs(live_lengths - file_lengths).max() < 0.01
     with pytest.raises(InputError, match="nothing received"):
-        calibrate.record_window([f"tcp://127.0.0.1:{live.free_ports(1)[0]}"], tmp_path / "none.mcap",
+        from_recording.record_window([f"tcp://127.0.0.1:{live_studio.free_ports(1)[0]}"], tmp_path / "none.mcap",
                                 studio.session, timeout_s=1.0)
     assert cli.main(["calibrate", "--connect", endpoint, "--out", str(tmp_path / "x")]) != 0  # needs --session
 
@@ -266,9 +266,9 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     beside it waits through a still start for motion, estimates the calibration from the live
     streams at low priority and publishes it; mocapd solves with the IMUs from then on. The
     recording, Calibration included, solved offline gives the live poses back."""
-    studio = live.prepare(tmp_path / "studio", seconds=45.0, seed=4, calibration="live", still_s=3.0)
-    run = live.play(studio, record=tmp_path / "take.mcap")
-    result = live.score(studio, run)
+    studio = live_studio.prepare(tmp_path / "studio", seconds=45.0, seed=4, calibration="live", still_s=3.0)
+    run = play.play(studio, record=tmp_path / "take.mcap")
+    result = score.score(studio, run)
     assert result["dropped"] == 0, result
     t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
     with_imus = np.array([len(p.imus) for p in run.poses])
@@ -290,8 +290,8 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert all(not c["quick"] for c in published[1:])
     calibration = [s for s in run.healths[-1].streams if s.stream == "calibration"]
     assert calibration and calibration[0].received == len(published) and calibration[0].active
-    session = json.loads((studio.calibrated / "session.json").read_text())
-    assert session["imus_calibrated"] and (studio.calibrated / session["layout"]).is_file()
+    session = Session.load(studio.calibrated / "session.json")
+    assert session.imus_calibrated and session.file("layout").is_file()
 
     poses, _, skeleton = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}

@@ -15,7 +15,7 @@ from collections.abc import Iterable, Iterator
 
 import zmq
 
-from mocap import transport, wire
+from mocap.net import transport, wire
 from mocap_edge import pacing
 from mocap_edge.detect.base import Detector, Person, open_detector
 from mocap_edge.detect.tracking import Tracker

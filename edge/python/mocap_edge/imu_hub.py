@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import zmq
 
-from mocap import transport, wire
+from mocap.net import transport, wire
 from mocap_edge import pacing
 from mocap_edge.streams import Streams
 

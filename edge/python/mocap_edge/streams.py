@@ -7,7 +7,7 @@ start of the take (ns):
   box captured the frame but ran no detection, high-speed mode),
   imu_ids (M,) str, imu_times_ns (S,), imu_quaternions (S, M, 4) w, x, y, z,
   imu_accelerations (S, M, 3) m/s^2 sensor frame.
-The simulated studio writes one (mocap.live); a real take could be converted to one. The
+The simulated studio writes one (mocap.demo.studio); a real take could be converted to one. The
 camera box plays one camera of it with the `sim:` frame source and keypoint model
 (sources/sim.py, detect/sim.py), the IMU hub all of its IMUs.
 """

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import zmq
 
-from mocap import transport, wire
-from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap.eval import edge_detector as evaluation
+from mocap.io.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap.net import transport, wire
 from mocap_edge import camera_box
-from mocap_edge.detect import evaluation
 from mocap_edge.sources.base import open_source
 
 pytestmark = pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(),

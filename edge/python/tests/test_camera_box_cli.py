@@ -39,7 +39,8 @@ def test_paired_frames_carry_the_mid_exposure_time_of_their_trigger_edge():
 
     import zmq
 
-    from mocap import transport, wire
+    from mocap.net import transport
+    from mocap.net import wire
     from mocap_edge import camera_box
     from mocap_edge.sources.base import open_source
     from mocap_edge.trigger import FakeTrigger, TriggerPairing

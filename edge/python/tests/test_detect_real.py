@@ -9,10 +9,10 @@ import sys
 import numpy as np
 import pytest
 
-from mocap import real_trial
-from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
-from mocap_edge.detect import evaluation, tracking
-from mocap_edge.detect import open_detector
+from mocap.eval import edge_detector as evaluation
+from mocap.eval import real_trial
+from mocap.io.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap_edge.detect import open_detector, tracking
 from mocap_edge.detect.blazepose import BlazePose
 from mocap_edge.detect.roi import Roi
 from mocap_edge.errors import ModelError

@@ -16,7 +16,8 @@ import pytest
 import zmq
 from zmq.utils.monitor import recv_monitor_message
 
-from mocap import transport, wire
+from mocap.net import transport
+from mocap.net import wire
 from mocap_edge import camera_box
 from mocap_edge.detect import open_detector
 from mocap_edge.detect.tracking import Tracker

@@ -1,6 +1,8 @@
 import numpy as np
 
-from mocap import _core, baselines, paths, studio
+from mocap import _core, paths
+from mocap.eval import baselines
+from mocap.model import studio, triangulation
 from mocap.sim import detector
 
 
@@ -20,7 +22,7 @@ def test_triangulation_is_exact_on_exact_detections_and_drops_an_outlier_view():
     rig = studio.ring_rig(5)
     det = studio.keypoints(rig, points)
     det[2, 0, :2] += 300.0  # one camera's nose is far off
-    got, valid = baselines.triangulate(rig, det, baselines.TriangulationSettings())
+    got, valid = triangulation.triangulate(rig, det, triangulation.TriangulationSettings())
     assert valid.all()
     np.testing.assert_allclose(got, points, atol=1e-6)
 
@@ -32,14 +34,14 @@ def test_a_mirrored_camera_is_swapped_back():
     twins = detector.mirror(layout.names)
     swapped = det.copy()
     swapped[1] = det[1, twins]
-    s = baselines.TriangulationSettings()
-    got, valid = baselines.triangulate(rig, swapped, s)
+    s = triangulation.TriangulationSettings()
+    got, valid = triangulation.triangulate(rig, swapped, s)
     fixed = baselines.fix_swaps(rig, swapped, got, valid, twins, s)
     np.testing.assert_allclose(fixed, det)
 
 
 def test_one_euro_filter_settles_and_holds_missing_values():
-    f = baselines.OneEuro(baselines.TriangulationSettings())
+    f = baselines.OneEuro(triangulation.TriangulationSettings())
     for i in range(200):
         out = f(i / 60, np.array([[1.0, 2.0, 3.0]]))
     np.testing.assert_allclose(out, [[1.0, 2.0, 3.0]], atol=1e-6)
@@ -57,7 +59,7 @@ def test_fit_to_points_recovers_the_sites():
 
 
 def test_triangulation_baseline_in_the_evaluation(shared):
-    from mocap import eval as evaluation
+    from mocap.eval import simulated as evaluation
     from mocap.sim import take
 
     config = take.Config(preset="hq13")

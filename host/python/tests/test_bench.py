@@ -1,6 +1,6 @@
 """The solver on real motion: a short run of the benchmark workload, judged on accuracy."""
 
-from mocap import bench
+from mocap.eval import bench
 
 
 def test_solver_tracks_real_motion_with_noisy_observations(shared):

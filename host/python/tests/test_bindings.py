@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from mocap import _core, paths, rotations, studio
+from mocap import _core, paths, rotations
+from mocap.model import studio
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +79,7 @@ def test_options_are_validated_when_replaced(skeleton):
 
 
 def test_python_solver_uses_the_shipped_prior_unless_told_not_to(skeleton):
-    from mocap.solver import Solver
+    from mocap.model.solver import Solver
 
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "coco17.json"), skeleton)
     rig = studio.ring_rig(4)

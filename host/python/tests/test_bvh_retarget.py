@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
-from mocap import _core, bvh, retarget, rotations
+from mocap import _core, rotations
 from mocap.errors import InputError
+from mocap.io import bvh
+from mocap.io import retarget
 
 # A small MotionBuilder-style clip: y up, left +x, facing +z, centimetres.
 CLIP = """HIERARCHY

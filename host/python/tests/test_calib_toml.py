@@ -1,8 +1,9 @@
 import numpy as np
 import pytest
 
-from mocap import calib_toml, rotations
+from mocap import rotations
 from mocap.errors import InputError
+from mocap.io import calib_toml
 
 CALIB = """
 [cam_01]

@@ -1,4 +1,4 @@
-"""The live calibrator's policy and buffer (mocap.calibrator): when it calibrates and what it
+"""The live calibrator's policy and buffer (mocap.calibration.live): when it calibrates and what it
 keeps. Its run beside mocapd is tested end to end in tests/test_live.py."""
 
 import json
@@ -7,8 +7,10 @@ import os
 import numpy as np
 import pytest
 
-from mocap import calibrator
 from mocap.calibration import informative
+from mocap.calibration import live as calibrator
+from mocap.calibration.from_messages import Estimated
+from mocap.io.session import Session
 
 GOOD, MIN = informative.GOOD_SCORE_DEG, informative.MIN_SCORE_DEG
 
@@ -69,16 +71,14 @@ class Immediate:
         if self.fail:
             f.set_exception(ValueError("calibration: the window solve failed"))
         else:
-            from mocap import calibrate
-
-            f.set_result(calibrate.Estimated('{"skeleton": 1}', '{"imus": []}', '{"layout": 1}',
-                                             {"frames": 3, "window": {"quick": args[-1]}}))
+            f.set_result(Estimated('{"skeleton": 1}', '{"imus": []}', '{"layout": 1}',
+                                   {"frames": 3, "window": {"quick": args[-1]}}))
         return f
 
 
 def moving_batches(seconds: float, amplitude_deg: float):
     """ImuBatch payloads of two sensors tilting sinusoidally, 100 Hz, 10 samples each."""
-    from mocap import wire
+    from mocap.net import wire
     from test_informative import readings
 
     t = np.arange(int(seconds * 100)) / 100.0
@@ -93,12 +93,11 @@ def moving_batches(seconds: float, amplitude_deg: float):
 
 
 def test_the_calibrator_publishes_when_due_repeats_and_survives_a_failed_estimate(tmp_path):
-    from mocap import wire
+    from mocap.net import wire
 
     now = [0.0]
     session = tmp_path / "session.json"
-    session.write_text('{"format": "mocap.session/1", "skeleton": "s.json", "rig": "r.json", "imus": "i.json", '
-                       '"layout": "l.json", "inputs": [], "output": ""}')
+    Session("s.json", "r.json", "l.json", "i.json", ["tcp://127.0.0.1:5600"], "tcp://*:5700").save(session)
     (tmp_path / "r.json").write_text("{}")  # copied into the calibrated session
     for fail in (True, False):
         c = calibrator.LiveCalibrator(session, tmp_path / f"out{fail}", 5.0, calibrator.Policy(), "calibrator",
@@ -143,7 +142,7 @@ def test_the_worker_ends_with_a_killed_calibrator(tmp_path):
 
     # Fixture: a calibrator process whose worker writes its pid, then idles.
     pid_file = tmp_path / "worker.pid"
-    script = ("import os, time\nfrom mocap import calibrator\n"
+    script = ("import os, time\nfrom mocap.calibration import live as calibrator\n"
               f"def job():\n    open({str(pid_file)!r}, 'w').write(str(os.getpid()))\n    time.sleep(60)\n"
               "with calibrator.WorkerPool() as pool:\n    pool.submit(job)\n    time.sleep(60)\n")
     parent = subprocess.Popen([sys.executable, "-c", script])

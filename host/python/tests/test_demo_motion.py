@@ -8,9 +8,12 @@ import subprocess
 import numpy as np
 import pytest
 
-from mocap import _core, demo_motion, paths, retarget, studio
+from mocap import _core, paths
 from mocap.errors import DataMissingError, InputError
-from mocap.sim import take
+from mocap.io import demo_data, retarget
+from mocap.io.trc import read_trc
+from mocap.model import studio
+from mocap.sim import demo_motion, take
 
 HEADER = ("PathFileType\t4\t(X/Y/Z)\tsmall.trc\n"
           "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames\n"
@@ -29,7 +32,7 @@ def write_trc(tmp_path, rows):
 
 
 def test_trc_is_read_in_metres_with_missing_markers_nan(tmp_path):
-    trc = demo_motion.read_trc(write_trc(tmp_path, ROWS))
+    trc = read_trc(write_trc(tmp_path, ROWS))
     assert trc.rate == 50 and trc.names == ["A", "B"]
     np.testing.assert_allclose(trc.times, [0, 0.02, 0.04])
     np.testing.assert_allclose(trc.markers[0], [[1, 2, 3], [0.01, 0.02, 0.03]])  # mm -> m
@@ -42,20 +45,20 @@ def test_trc_is_read_in_metres_with_missing_markers_nan(tmp_path):
                                           ("2\t0.02" + "\t1" * 7, r"small.trc:8: 9 cells")])
 def test_a_malformed_row_is_an_error_naming_its_line(tmp_path, bad, message):
     with pytest.raises(InputError, match=message):
-        demo_motion.read_trc(write_trc(tmp_path, [ROWS[0], bad, ROWS[2]]))
+        read_trc(write_trc(tmp_path, [ROWS[0], bad, ROWS[2]]))
 
 
 def test_unknown_units_are_an_error(tmp_path):
     path = write_trc(tmp_path, ROWS)
     path.write_text(path.read_text().replace("\tmm\t", "\tfurlong\t"))
     with pytest.raises(InputError, match=r"small.trc:3"):
-        demo_motion.read_trc(path)
+        read_trc(path)
 
 
 @pytest.fixture(scope="module")
 def cache():
     try:
-        return demo_motion.fetch()
+        return demo_data.fetch()
     except DataMissingError as e:
         pytest.skip(f"the demo motion is not cached and cannot be fetched: {e}")
 
@@ -65,18 +68,18 @@ def test_fetch_uses_an_intact_cache_and_refuses_an_altered_one(cache, tmp_path, 
         raise subprocess.CalledProcessError(1, args[0], stderr="no network")
 
     monkeypatch.setattr(subprocess, "run", offline)
-    for name, _ in demo_motion.MEMBERS.values():
+    for name, _ in demo_data.MEMBERS.values():
         shutil.copy(cache / name, tmp_path / name)
-    assert demo_motion.fetch(tmp_path) == tmp_path  # no download attempted
-    with open(tmp_path / demo_motion.TRIAL, "a") as f:
+    assert demo_data.fetch(tmp_path) == tmp_path  # no download attempted
+    with open(tmp_path / demo_data.TRIAL, "a") as f:
         f.write("1\n")
     with pytest.raises(DataMissingError, match="no network"):
-        demo_motion.fetch(tmp_path)
+        demo_data.fetch(tmp_path)
 
 
 @pytest.fixture(scope="module")
 def trial(cache):
-    trc = demo_motion.read_trc(cache / demo_motion.TRIAL)
+    trc = read_trc(cache / demo_data.TRIAL)
     world = demo_motion.world_markers(trc)
     skeleton, thetas, dt = demo_motion.fit_motion(trc, trc.rate)
     return trc, world, demo_motion.body_model(trc.names, world), skeleton, thetas, dt

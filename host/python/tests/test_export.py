@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 from pythonosc.osc_bundle import OscBundle
 
-from mocap import _core, bvh, paths, rotations
-from mocap.export import VmcSender, write_bvh, write_joints_csv
-from mocap.retarget import P
+from mocap import _core, paths, rotations
+from mocap.io import bvh
+from mocap.io.bvh_export import write_bvh
+from mocap.io.joints_csv import write_joints_csv
+from mocap.io.retarget import P
+from mocap.net.vmc import VmcSender
 
 FRAMES = 40
 FRAME_RATE = 30.0
@@ -233,7 +236,7 @@ def test_vmc_send_failures_are_counted_not_raised(skeleton):
 
 def test_positions_csv_writes_published_bones_and_refuses_what_is_not_finite(tmp_path, skeleton, fk):
     """The bones as the host published them (each frame with the calibration in use then)."""
-    from mocap.export.joints_csv import write_positions_csv
+    from mocap.io.joints_csv import write_positions_csv
 
     path = tmp_path / "published.csv"
     positions = fk[1].reshape(FRAMES, -1, 3)

@@ -8,8 +8,8 @@ import pytest
 
 from mocap import _core, rotations
 from mocap.calibration import imus as calibration
+from mocap.io.take_folder import read_take
 from mocap.sim import take_out
-from mocap.take_folder import read_take
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,8 @@ kept, and IMUs that never move are left out with a reason."""
 import numpy as np
 
 from mocap import rotations
-from mocap.calibration import informative, window
+from mocap.calibration import from_messages, informative
+from mocap.calibration.readings import ImuReadings
 
 RATE = 60.0
 
@@ -73,7 +74,7 @@ def test_imus_that_never_move_are_left_out_with_a_reason():
     q = readings(0.5 * np.sin(2 * np.pi * t))  # 0.35 deg: standing still, breathing
     det = np.zeros((len(t), 2, 17, 3))
     det[..., 2] = 1.0  # two cameras see every frame
-    r = window.ImuReadings(["a", "b", "c"], [0, 1, 2], q)
+    r = ImuReadings(["a", "b", "c"], [0, 1, 2], q)
     start, score, why = informative.calibration_window(det, t, r, 5.0)
     assert start == 0 and score < informative.MIN_SCORE_DEG and "too still" in why
     assert informative.calibration_window(det, t, None, 5.0) == (0, None, None)
@@ -81,10 +82,10 @@ def test_imus_that_never_move_are_left_out_with_a_reason():
 
 def test_the_live_watch_scores_the_last_seconds_of_samples():
     """`mocap calibrate --connect` records until the IMUs moved enough in the last seconds
-    (calibrate.MotionWatch over the ImuBatch messages as they arrive)."""
-    from mocap import calibrate, wire
+    (from_messages.MotionWatch over the ImuBatch messages as they arrive)."""
+    from mocap.net import wire
 
-    watch = calibrate.MotionWatch(seconds=5.0)
+    watch = from_messages.MotionWatch(seconds=5.0)
     assert np.isnan(watch.score())  # nothing yet
     t = np.arange(int(12 * 100)) / 100.0  # 100 Hz
     tilt = np.where(t >= 6.0, 25.0 * np.sin(2 * np.pi * 0.8 * t), 0.0)
@@ -97,7 +98,7 @@ def test_the_live_watch_scores_the_last_seconds_of_samples():
                 s = batch.samples.add(sensor_id=name, sample_time_ns=int(t[f] * 1e9))
                 s.qw, s.qx, s.qy, s.qz = q[f, i]
         invalid = batch.samples.add(sensor_id="a", sample_time_ns=int(t[k] * 1e9), qw=9.0)
-        invalid.status = calibrate.INVALID_ORIENTATION  # flagged: not counted
+        invalid.status = from_messages.INVALID_ORIENTATION  # flagged: not counted
         watch.add(batch)
         scores[round(t[k + 9])] = watch.score()
     assert scores[5] < 0.5 and scores[12] > informative.GOOD_SCORE_DEG, scores

@@ -1,5 +1,5 @@
 """Each solver option is declared once, in C++ (SolverOptions::VisitFields), and reaches the
-bindings, the session reader (what mocapd reads) and the Python wrapper (mocap.solver): this
+bindings, the session reader (what mocapd reads) and the Python wrapper (mocap.model.solver): this
 fails when a field is missing from any of them."""
 
 import json
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from mocap import _core
-from mocap import solver as wrapper
 from mocap.errors import InputError
+from mocap.model import solver as wrapper
 
 
 def _properties(cls) -> set[str]:
@@ -35,7 +35,7 @@ def test_the_bindings_export_every_declared_field(cls):
 def test_the_session_reader_and_the_wrapper_take_every_option_the_bindings_export():
     exported = _flattened(_core.SolverOptions, _core.SolverOptions())
     assert exported == set(_core.session_solver_keys()), "the session reader"
-    assert exported == set(wrapper.option_names()), "the Python wrapper (mocap.solver)"
+    assert exported == set(wrapper.option_names()), "the Python wrapper (mocap.model.solver)"
     assert len(exported) == 35  # 5 terms x 4 fields + 15 others: update when a field is added
 
 

@@ -3,7 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from mocap import paths, prior
+from mocap import paths
+from mocap.model import prior
 
 
 def test_kmeans_finds_separated_clusters_whatever_their_sizes():

@@ -7,7 +7,9 @@ import zmq
 from google.protobuf import descriptor_pb2, descriptor_pool, json_format, message_factory
 from mcap.reader import make_reader
 
-from mocap import cli, recording, transport, wire
+from mocap import cli
+from mocap.net import transport, wire
+from mocap.recording import reader, recorder, replay
 
 TIMEOUT_S = 30.0  # bound on waits for the network; generous for loaded machines, never a measured duration
 
@@ -38,7 +40,7 @@ def malformed_frames() -> dict[str, list[bytes]]:
 
 
 def topic(message) -> str:
-    return recording.topic_and_time(message)[0]
+    return recorder.topic_and_time(message)[0]
 
 
 def expected_topics(messages) -> list[str]:
@@ -53,25 +55,25 @@ def recorded(tmp_path):
     order = list(range(len(messages)))
     random.Random(0).shuffle(order)
     path = tmp_path / "take.mcap"
-    with recording.Recorder(path) as recorder:
+    with recorder.Recorder(path) as rec:
         for k, i in enumerate(order):
-            assert recorder.write(wire.encode(messages[i]), log_times[i])
+            assert rec.write(wire.encode(messages[i]), log_times[i])
             if k % 3 == 0:
                 for frames in malformed_frames().values():
-                    assert not recorder.write(frames, log_times[i])
-    return path, messages, log_times, recorder
+                    assert not rec.write(frames, log_times[i])
+    return path, messages, log_times, rec
 
 
 def test_read_gives_back_the_well_formed_messages_in_log_time_order(recorded):
-    path, messages, log_times, recorder = recorded
-    got = list(recording.read(path))
+    path, messages, log_times, rec = recorded
+    got = list(reader.read(path))
     assert [(m.log_time_ns, m.topic, m.type_name, m.payload) for m in got] == [
         (t, topic(m), m.DESCRIPTOR.full_name, m.SerializeToString()) for t, m in zip(log_times, messages)]
     assert {m.topic for m in got} == {"/camera/cam0", "/camera/cam1", "/imu/hub0", "/pose", "/health/host",
                                       "/calibration/calibrator"}
     writes_with_malformed = len(range(0, len(messages), 3))
-    assert recorder.dropped == {reason: writes_with_malformed for reason in malformed_frames()}
-    assert sum(recorder.recorded.values()) == len(messages) and recorder.recorded["/camera/cam1"] == 3
+    assert rec.dropped == {reason: writes_with_malformed for reason in malformed_frames()}
+    assert sum(rec.recorded.values()) == len(messages) and rec.recorded["/camera/cam1"] == 3
 
 
 def test_recording_is_self_describing(recorded):
@@ -93,7 +95,7 @@ def test_recording_is_self_describing(recorded):
             cls = _message_class(pool.FindMessageTypeByName(schema.name))
             decoded.append((channel.topic, message.publish_time, cls.FromString(message.data)))
     assert [(t, publish, as_dict(m)) for t, publish, m in decoded] == [
-        (topic(m), recording.topic_and_time(m)[1], as_dict(m)) for m in messages]
+        (topic(m), recorder.topic_and_time(m)[1], as_dict(m)) for m in messages]
 
 
 def _message_class(descriptor):
@@ -113,7 +115,7 @@ def test_record_over_zeromq_keeps_everything_sent_after_joining(tmp_path):
     results = []
     with zmq.Context() as context, transport.publisher(context, "tcp://127.0.0.1:*") as publisher:
         endpoint = publisher.getsockopt_string(zmq.LAST_ENDPOINT)
-        thread = threading.Thread(target=lambda: results.append(recording.record(
+        thread = threading.Thread(target=lambda: results.append(recorder.record(
             [endpoint], path, stop=stop, on_record=lambda t, _: markers[t].set() if t in markers else None)))
         thread.start()
         try:
@@ -131,7 +133,7 @@ def test_record_over_zeromq_keeps_everything_sent_after_joining(tmp_path):
         finally:
             stop.set()
             thread.join()
-    got = [m for m in recording.read(path) if m.topic not in markers]
+    got = [m for m in reader.read(path) if m.topic not in markers]
     assert [(m.topic, m.payload) for m in got] == [(topic(m), m.SerializeToString()) for m in stream_messages()]
     assert results[0].dropped == {reason: 1 for reason in malformed_frames()}
     assert results[0].recorded["/health/end"] == 1 and results[0].recorded["/camera/cam0"] == 3
@@ -155,7 +157,7 @@ def test_replay_sends_the_chosen_topics_in_order(recorded, speed, topics, kept):
     endpoint, results = free_tcp_endpoint(), []
     with zmq.Context() as context, transport.subscriber(context, [endpoint]) as subscriber:
         thread = threading.Thread(target=lambda: results.append(
-            recording.replay(path, endpoint, speed, topics, wait_for_subscribers=TIMEOUT_S)))
+            replay.replay(path, endpoint, speed, topics, wait_for_subscribers=TIMEOUT_S)))
         thread.start()
         try:
             got = [subscriber.recv_multipart() for _ in expected if subscriber.poll(TIMEOUT_S * 1000)]
@@ -170,11 +172,11 @@ def test_restamping_moves_every_input_time_the_host_reads(recorded):
     by the same offset, so a live host applies a recorded calibration where it was applied."""
     path, *_ = recorded
     offset = 10**12
-    for m in recording.read(path):
+    for m in reader.read(path):
         if not m.topic.startswith(("/camera/", "/imu/", "/calibration/")):
             continue
         before, after = wire.TYPES[m.type_name].FromString(m.payload), wire.TYPES[m.type_name].FromString(
-            recording._shifted(m, offset))
+            replay._shifted(m, offset))
         if isinstance(before, wire.KeypointFrame):
             assert after.capture_time_ns - before.capture_time_ns == offset
         elif isinstance(before, wire.ImuBatch):

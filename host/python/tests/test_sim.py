@@ -137,12 +137,12 @@ def test_imu_stats_of_the_real_recordings(shared):
 
 
 def test_imu_only_baseline_follows_the_sensors(shared):
-    from mocap import eval as evaluation
+    from mocap.eval import baselines, metrics
     from mocap.sim import take
 
     config = take.Config(preset="hq13", imu=dataclasses.replace(imu.ImuErrors(), random=False))
     t = take.simulate(shared / "data/mocap/cmu-daz/16_36.bvh", config, np.random.default_rng(0))
-    result = evaluation.errors(t.skeleton, t.thetas, evaluation.imu_only(t), 1 / 60)
+    result = metrics.errors(t.skeleton, t.thetas, baselines.imu_only(t), 1 / 60)
     # Noise-free sensors: every bone carrying one is exact, and the root is aligned.
     for name in ("pelvis", "spine_upper", "forearm_l", "shin_r", "foot_l"):
         assert result["per_joint"][name]["ori_deg"] < 1e-6

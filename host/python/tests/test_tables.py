@@ -1,6 +1,6 @@
 """The paper's tables, generated end to end on one short clip."""
 
-from mocap import tables
+from mocap.eval import tables
 
 
 def test_tables_on_a_short_clip(shared, tmp_path, monkeypatch):

@@ -4,9 +4,10 @@ import shutil
 import numpy as np
 import pytest
 
-from mocap import _core, calib_toml, demo_motion, rotations, take_folder, xsens_csv
+from mocap import _core, rotations
 from mocap.errors import InputError, TakeError
-from mocap.sim import imu, take_out
+from mocap.io import calib_toml, take_folder, xsens_csv
+from mocap.sim import demo_motion, imu, take_out
 
 PIXEL_TOL, CONFIDENCE_TOL = 0.5e-3 + 1e-9, 0.5e-4 + 1e-9  # the JSON's rounding
 

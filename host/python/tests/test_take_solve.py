@@ -11,10 +11,12 @@ import sys
 import numpy as np
 import pytest
 
-from mocap import _core, balancing_take, rotations, take_solve
-from mocap.joint_centres import JOINTS
-from mocap.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap import _core, rotations
+from mocap.eval import balancing_take
+from mocap.io.demo_data import TRIAL_CACHE, TRIAL_DONE
+from mocap.model.joint_centres import JOINTS
 from mocap.sim import take_out
+from mocap.takes import solve as take_solve
 
 
 @pytest.fixture(scope="module")
@@ -148,7 +150,7 @@ def test_pose2sims_balancing_trial_as_a_take_lands_near_its_own_3d(tmp_path):
 def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated):
     from mocap.calibration import window
     from mocap.errors import InputError
-    from mocap.take_folder import read_take
+    from mocap.io.take_folder import read_take
 
     take = read_take(simulated[0])
     det = take_solve.subject(take)

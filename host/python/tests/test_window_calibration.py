@@ -5,16 +5,19 @@ it pins what motion alone leaves to the prior (the mountings' twist)."""
 import numpy as np
 import pytest
 
-from mocap import demo_motion
-from mocap import eval as evaluation
 from mocap.calibration import window
+from mocap.calibration.held_pose import held_pose_frames
+from mocap.eval import metrics
+from mocap.eval import simulated as evaluation
+from mocap.model.poses import calibration_poses
+from mocap.sim import demo_motion
 from mocap.sim import take as sim_take
 
 
 def pose_then_motion(pose: str = "T", seconds: float = 5.0):
     """A take of the demo motion after 1 s of a T- or N-pose and a 0.5 s blend into the motion."""
     skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
-    thetas = demo_motion.after_held_pose(thetas, window.calibration_poses(skeleton)[pose], dt)
+    thetas = demo_motion.after_held_pose(thetas, calibration_poses(skeleton)[pose], dt)
     return sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(), np.random.default_rng(2))
 
 
@@ -26,8 +29,8 @@ def take():
 def calibrated(t, use_held_pose: bool):
     c = evaluation.estimate_calibration(t, use_held_pose=use_held_pose)
     solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
-    errors = evaluation.errors(t.skeleton, t.thetas, solved, 1 / 60, c.skeleton)
-    mounts = [e["mount_deg"] for e in evaluation.calibration_errors(t, c)["imus"].values()]
+    errors = metrics.errors(t.skeleton, t.thetas, solved, 1 / 60, c.skeleton)
+    mounts = [e["mount_deg"] for e in metrics.calibration_errors(t, c)["imus"].values()]
     return c, errors, np.median(mounts)
 
 
@@ -54,9 +57,9 @@ def test_an_n_pose_is_found_and_helps_too():
 def test_no_calibration_pose_is_found_in_motion(take):
     skeleton = take.skeleton
     moving = take.thetas[120:360]  # the demo motion itself
-    assert window.held_pose_frames(skeleton, moving, take.times[120:360])[0] is None
+    assert held_pose_frames(skeleton, moving, take.times[120:360])[0] is None
     # The truth's own T-pose (the first second, exact and still) is found.
-    name, found = window.held_pose_frames(skeleton, take.thetas[:120], take.times[:120])
+    name, found = held_pose_frames(skeleton, take.thetas[:120], take.times[:120])
     assert name == "T" and len(found) >= 45 and found.max() < 75  # measured: frames 0-51 of the 60 held
 
 
@@ -70,11 +73,11 @@ def test_keypoint_sites_are_estimated_where_the_window_observes_them():
     for std in (0.0, window.SITE_OBSERVABLE_STD):
         c = evaluation.estimate_calibration(t, site_std=std)
         solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
-        sites = evaluation.calibration_errors(t, c)["sites"].values()
+        sites = metrics.calibration_errors(t, c)["sites"].values()
         results[std] = (c.report["site_directions_kept"],
                         *(np.median([s[k] for s in sites]) for k in ("estimated_cm", "layout_cm",
                                                                      "observed_estimated_cm", "observed_layout_cm")),
-                        evaluation.errors(t.skeleton, t.thetas, solved, dt, c.skeleton)["joint_centres_pos_cm"])
+                        metrics.errors(t.skeleton, t.thetas, solved, dt, c.skeleton)["joint_centres_pos_cm"])
     (kept0, *_, centres0), (kept, estimated, layout, observed, observed_layout, centres) = results.values()
     # Measured (seed 4, 6 s): 82 of 99 directions kept; sites median 2.1 -> 1.2 cm from the
     # detector's, along the kept directions 1.9 -> 0.8 cm; joint centres 2.10 -> 2.09 cm (the 8

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from mocap import rotations
-from mocap.calibration.window import SECONDS, Calibration, ImuReadings
+from mocap.calibration.readings import ImuReadings
+from mocap.calibration.window import SECONDS, Calibration
 from mocap.calibration.window import estimate as window_estimate
 
 MIN_SCORE_DEG = 3.0  # below: too still to calibrate the IMUs from

@@ -1,6 +1,6 @@
 """The subject's skeleton from the first seconds of multi-view keypoints.
 
-Keypoints are triangulated robustly per frame (mocap.baselines.triangulate: best camera
+Keypoints are triangulated robustly per frame (mocap.model.triangulation: best camera
 pair's inliers). For each length the layout defines by two keypoints (hip to knee, knee to
 ankle, shoulder to elbow, elbow to wrist, hip and shoulder width, hips' to shoulders' centre,
 ankle to foot tip), the median over frames of the triangulated distance is compared with the
@@ -16,7 +16,8 @@ import dataclasses
 
 import numpy as np
 
-from mocap import _core, baselines, paths, studio
+from mocap import _core, paths
+from mocap.model import studio, triangulation
 
 # Group -> bones whose offsets (from their parent) it scales.
 GROUPS = {"hip_width": ["thigh_l", "thigh_r"], "thigh": ["shin_l", "shin_r"], "shin": ["foot_l", "foot_r"],
@@ -62,9 +63,9 @@ def scaled(base: _core.Skeleton, scales: dict[str, float]) -> _core.Skeleton:
 def triangulated(rig: _core.Rig, detections: np.ndarray) -> np.ndarray:
     """(F, K, 3) points, NaN where not triangulated from inliers, of detections (F, C, K, 3)."""
     out = np.full(detections.shape[:1] + detections.shape[2:3] + (3,), np.nan)
-    settings = baselines.TriangulationSettings()
+    settings = triangulation.TriangulationSettings()
     for f, det in enumerate(detections):
-        points, valid = baselines.triangulate(rig, det, settings)
+        points, valid = triangulation.triangulate(rig, det, settings)
         out[f, valid] = points[valid]
     return out
 

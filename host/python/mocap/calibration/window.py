@@ -41,12 +41,16 @@ import dataclasses
 
 import numpy as np
 
-from mocap import _core, paths, prior, rotations
+from mocap import _core, paths, rotations
 from mocap.calibration import imu_position
 from mocap.calibration import imus as imu_calibration
 from mocap.calibration import skeleton as skeleton_estimate
+from mocap.calibration.held_pose import held, held_pose_frames
+from mocap.calibration.readings import ImuReadings
 from mocap.errors import InputError
-from mocap.solver import Solver
+from mocap.model import prior
+from mocap.model.poses import calibration_poses
+from mocap.model.solver import Solver
 
 SECONDS = 5.0  # the window: the take's first seconds
 STEP = 2  # every STEP-th frame of the window enters the joint solve
@@ -63,28 +67,6 @@ DENSE = 0.5  # IMU positions are estimated when at least this fraction of the wi
 # headings from elsewhere (the truth, a suit's own calibration) it pulls them to that yaw:
 # off by default there (docs/calibration.md).
 HEADING_TIME_CONSTANT_S = 1.0
-
-
-@dataclasses.dataclass
-class ImuReadings:
-    """What the calibration needs of the IMUs: orientations at the video frames."""
-    names: list[str]
-    bones: list[int]  # skeleton bone index per sensor
-    quaternions: np.ndarray  # (F, M, 4) w, x, y, z: sensor -> the sensor's own reference (NaN: none)
-    accelerations: np.ndarray | None = None  # (F, M, 3) m/s^2, sensor frame, gravity's reaction (NaN: none)
-
-
-def readings_at(times: np.ndarray, sensors: list[tuple[str, int, np.ndarray, np.ndarray, np.ndarray]]) -> ImuReadings:
-    """ImuReadings at the video frames' `times` from each sensor's (name, bone, sample times,
-    quaternions (N, 4) w first, accelerations (N, 3)): orientations slerped, accelerations
-    interpolated, NaN before a sensor's first sample and after its last."""
-    quats = np.full((len(times), len(sensors), 4), np.nan)
-    accs = np.full((len(times), len(sensors), 3), np.nan)
-    for i, (_, _, t, q, a) in enumerate(sensors):
-        inside = (times >= t[0]) & (times <= t[-1])
-        quats[inside, i] = rotations.quaternion_from_matrix(imu_calibration.at_times(times[inside], t, q))
-        accs[inside, i] = np.stack([np.interp(times[inside], t, a[:, k]) for k in range(3)], axis=1)
-    return ImuReadings([s[0] for s in sensors], [s[1] for s in sensors], quats, accs)
 
 
 @dataclasses.dataclass
@@ -153,60 +135,6 @@ SHIFT_GROUPS = {"hips": (["thigh_l", "thigh_r"], (0.02, 0.02, 0.001)),
 JOINT_SIGMAS: dict[str, tuple[float, float, float]] = {}
 
 
-# A calibration pose at the start, as suits ask for: a T-pose (our rest pose) or an N-pose
-# (standing, arms hanging). A stretch of frames where the video-only solve holds every limb
-# and spine segment's direction (what video sees, not the twist) within HELD_MAX_DEG of the
-# pose's, the subject's facing turned away, and turns it by less than HELD_STILL_DEG in 0.5 s
-# (means over +-0.25 s: per-frame solves jitter), for HELD_MIN_S or longer, is taken as the
-# subject holding it; those frames' joints are then tied to the pose (HELD_SIGMA), which
-# defines the bone frames as a suit's calibration does and pins the mountings' twist.
-HELD_BONES = ["spine_lower", "spine_upper", "upper_arm_l", "upper_arm_r", "forearm_l", "forearm_r",
-              "thigh_l", "thigh_r", "shin_l", "shin_r"]
-HELD_MAX_DEG, HELD_STILL_DEG, HELD_MIN_S, HELD_SIGMA = 20.0, 2.0, 0.5, 0.01
-
-
-def calibration_poses(skeleton: _core.Skeleton) -> dict[str, np.ndarray]:
-    """The poses recognised: "T" (the rest pose) and "N" (the upper arms turned down)."""
-    n_pose = np.zeros(skeleton.pose_dim)
-    n_pose[3 + 3 * skeleton.bone_names.index("upper_arm_l")] = -np.pi / 2
-    n_pose[3 + 3 * skeleton.bone_names.index("upper_arm_r")] = np.pi / 2
-    return {"T": np.zeros(skeleton.pose_dim), "N": n_pose}
-
-
-def held_pose_frames(skeleton: _core.Skeleton, thetas: np.ndarray, times: np.ndarray) -> tuple[str | None, np.ndarray]:
-    """The calibration pose held longest ("T" or "N", None) and its frames."""
-    bones = [skeleton.bone_names.index(b) for b in HELD_BONES]
-    children = [next(c for c, p in enumerate(skeleton.parents) if p == b) for b in bones]
-    axes = np.array([skeleton.offsets[c] / np.linalg.norm(skeleton.offsets[c]) for c in children])
-    world, yaws = [], []
-    for theta in thetas:
-        rot, _ = skeleton.forward_kinematics(theta)
-        world.append(np.einsum("bjk,bk->bj", rot[bones], axes))
-        yaws.append(np.arctan2(rot[0][1, 0], rot[0][0, 0]))  # the subject's facing, from the pelvis
-    world = np.array(world)  # (F, bones, 3)
-    yaws = np.unwrap(yaws)
-    half = max(1, int(round(0.25 / max(float(np.median(np.diff(times))), 1e-3)))) if len(times) > 1 else 1
-    # Per-frame video solves jitter by degrees: the tests are on means over +-0.25 s.
-    mean = np.array([world[max(0, f - half): f + half + 1].mean(axis=0) for f in range(len(world))])
-    mean /= np.linalg.norm(mean, axis=-1, keepdims=True)
-    yaws = np.array([np.median(yaws[max(0, f - half): f + half + 1]) for f in range(len(yaws))])
-    facing = np.einsum("fij,fbj->fbi", rotations.exp(np.stack([np.zeros_like(yaws)] * 2 + [-yaws], axis=1)), mean)
-    angle = lambda a, b: np.degrees(np.arccos(np.clip(np.sum(a * b, axis=-1), -1.0, 1.0)))  # noqa: E731
-    before, after = np.roll(mean, half, axis=0), np.roll(mean, -half, axis=0)  # the means a half-window away
-    still = angle(before, after).max(axis=1) <= HELD_STILL_DEG
-    still[:half] = still[-half:] = False
-    best = (None, np.array([], int))
-    for name, pose in calibration_poses(skeleton).items():
-        target = np.einsum("bjk,bk->bj", skeleton.forward_kinematics(pose)[0][bones], axes)  # facing +x
-        lo, hi = imu_position.longest_run(still & (angle(facing, target[None]).max(axis=1) <= HELD_MAX_DEG))
-        if hi <= lo:
-            continue
-        lo, hi = max(0, lo - half), min(len(times), hi + half)  # the frames the means held still cover
-        if times[hi - 1] - times[lo] >= HELD_MIN_S and hi - lo > len(best[1]):
-            best = (name, np.arange(lo, hi))
-    return best
-
-
 def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> list[int]:
     """Per bone: the index of its group in `groups`, -1 for none."""
     out = [-1] * skeleton.num_bones
@@ -227,50 +155,100 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     about half the time: a first calibration for a live session, while the full one runs."""
     if first_frame:
         f = first_frame
-        tail = None if readings is None else dataclasses.replace(
-            readings, quaternions=readings.quaternions[f:],
-            accelerations=None if readings.accelerations is None else readings.accelerations[f:])
-        c = estimate(rig, detections[f:], times[f:], layout_name, tail, seconds, step, site_std, use_held_pose,
-                     quick=quick)
+        c = estimate(rig, detections[f:], times[f:], layout_name, None if readings is None else readings.tail(f),
+                     seconds, step, site_std, use_held_pose, quick=quick)
         c.window_frames = c.window_frames + f
         c.report["window_start_s"] = float(times[f] - times[0])
         return c
-    estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0 and not quick
-    window = int(np.searchsorted(times, times[0] + seconds))
-    window = max(window, 1)
-    start = skeleton_estimate.estimate(rig, detections[:window], layout_name)
-    skel = start.skeleton
-    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{layout_name}.json"), skel).scaled_to(skel)
-    thetas, _ = solve_frames(Solver(skel, rig, layout, []), detections[:window], times[:window], None)
-    sites, first = [], []
-    bone_world = np.array([skel.forward_kinematics(t)[0] for t in thetas])
-    for i, name in enumerate(readings.names if readings else []):
-        q = readings.quaternions[:window, i]
-        seen = np.isfinite(q).all(axis=1)
-        site = _core.ImuSite()
-        site.name, site.bone = name, readings.bones[i]
-        if seen.sum() >= 10:
-            c = imu_calibration.calibrate(name, skel.bone_names[site.bone], bone_world[seen, site.bone],
-                                          rotations.matrix_from_quaternion(q[seen]))
-            site.mount, site.reference = c.mount, rotations.exp(np.array([0.0, 0.0, c.heading_rad]))
-            first.append(c.residual_deg)
-        else:
-            first.append(float("nan"))
-        sites.append(site)
-    frames, starts, used = [], [], []
-    seen_by = (detections[:window, :, :, 2] > 0).any(axis=2).sum(axis=1)  # cameras per frame
-    seen = np.flatnonzero(seen_by >= 2)  # frames between detections add nothing
-    pose_name, held_frames = held_pose_frames(skel, thetas, times[:window]) if use_held_pose else (None, [])
-    held = set(np.asarray(held_frames).tolist())
-    for f in sorted(set(seen[::step].tolist()) | (held & set(seen.tolist()))):  # every held frame
-        cams = [c for c in range(detections.shape[1]) if (detections[f, c, :, 2] > 0).any()]
-        n = len(sites)
-        q = readings.quaternions[f] if readings else np.zeros((0, 4))
-        frames.append((float(times[f]), cams, detections[f, cams], list(range(n)), q, np.full((n, 3), np.nan)))
-        starts.append(thetas[f])
-        used.append(f)
+    window = max(int(np.searchsorted(times, times[0] + seconds)), 1)
+    w = _Window(rig, detections[:window], times[:window], readings, step)
+    start = _start(w, layout_name)
+    pose_name, held_frames = held_pose_frames(start.skeleton, start.thetas, w.times) if use_held_pose else (None, [])
+    held_set = set(np.asarray(held_frames).tolist())
+    frames, starts, used = _joint_frames(w, len(start.sites), start.thetas, held_set)
     if not frames:
         raise InputError(f"no frame of the first {seconds:g} s is seen by two cameras: nothing to calibrate from")
+    options = _options(start.skeleton, [j for j, f in enumerate(used) if f in held_set],
+                       calibration_poses(start.skeleton).get(pose_name))
+    dense = len(used) * step >= DENSE * window
+    estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0 and not quick
+    solved = _solve_window(w, start, frames, starts, options, dense, quick, site_std if estimate_sites else 0.0)
+    report = _report(w, start, solved, len(frames), quick, estimate_sites, pose_name, len(options.held_poses))
+    imus = list(solved.result.imus)
+    report["imu_positions"] = _place_imus(solved.result.skeleton, rig, solved.layout, imus, w.detections, w.times,
+                                          readings, dense)
+    return Calibration(solved.result.skeleton, solved.layout, imus, start.estimate, report, np.array(used),
+                       np.array(solved.thetas), solved.directions)
+
+
+@dataclasses.dataclass
+class _Window:
+    """The window's inputs: detections (W, C, K, 3) at times (W,), the readings (all frames)."""
+    rig: _core.Rig
+    detections: np.ndarray
+    times: np.ndarray
+    readings: ImuReadings | None
+    step: int
+
+
+@dataclasses.dataclass
+class _Start:
+    """Steps 1-3: the skeleton from triangulated keypoints, the window solved from video with
+    it, and each IMU's mounting and heading against that solve."""
+    estimate: skeleton_estimate.SkeletonEstimate
+    skeleton: _core.Skeleton
+    layout: _core.KeypointLayout
+    thetas: np.ndarray  # (W, 66)
+    sites: list  # _core.ImuSite per sensor
+    residuals_deg: list[float]  # step 3's, per sensor (NaN: too few readings)
+
+
+def _start(w: _Window, layout_name: str) -> _Start:
+    estimate = skeleton_estimate.estimate(w.rig, w.detections, layout_name)
+    skel = estimate.skeleton
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{layout_name}.json"), skel).scaled_to(skel)
+    thetas, _ = solve_frames(Solver(skel, w.rig, layout, []), w.detections, w.times, None)
+    sites, first = [], []
+    bone_world = np.array([skel.forward_kinematics(t)[0] for t in thetas])
+    for i, name in enumerate(w.readings.names if w.readings else []):
+        site = _core.ImuSite()
+        site.name, site.bone = name, w.readings.bones[i]
+        first.append(_mounting(site, skel, bone_world, w.readings.quaternions[:len(w.times), i]))
+        sites.append(site)
+    return _Start(estimate, skel, layout, thetas, sites, first)
+
+
+def _mounting(site: _core.ImuSite, skel: _core.Skeleton, bone_world: np.ndarray, q: np.ndarray) -> float:
+    """Step 3 for one IMU: sets the site's mount and reference; its residual (deg; NaN: fewer
+    than 10 readings, the site left as it is)."""
+    seen = np.isfinite(q).all(axis=1)
+    if seen.sum() < 10:
+        return float("nan")
+    c = imu_calibration.calibrate(site.name, skel.bone_names[site.bone], bone_world[seen, site.bone],
+                                  rotations.matrix_from_quaternion(q[seen]))
+    site.mount, site.reference = c.mount, rotations.exp(np.array([0.0, 0.0, c.heading_rad]))
+    return c.residual_deg
+
+
+def _joint_frames(w: _Window, n_sites: int, thetas: np.ndarray, held_frames: set[int]) -> tuple[list, list, list]:
+    """The frames of the joint solve: every `step`-th seen by two cameras or more, and every
+    held one so seen; (the solver's frames, their starting poses, their indices)."""
+    frames, starts, used = [], [], []
+    seen_by = (w.detections[:, :, :, 2] > 0).any(axis=2).sum(axis=1)  # cameras per frame
+    seen = np.flatnonzero(seen_by >= 2)  # frames between detections add nothing
+    for f in sorted(set(seen[::w.step].tolist()) | (held_frames & set(seen.tolist()))):  # every held frame
+        cams = [c for c in range(w.detections.shape[1]) if (w.detections[f, c, :, 2] > 0).any()]
+        q = w.readings.quaternions[f] if w.readings else np.zeros((0, 4))
+        frames.append((float(w.times[f]), cams, w.detections[f, cams], list(range(n_sites)), q,
+                       np.full((n_sites, 3), np.nan)))
+        starts.append(thetas[f])
+        used.append(f)
+    return frames, starts, used
+
+
+def _options(skel: _core.Skeleton, held_frames: list[int], pose: np.ndarray | None) -> _core.CalibrationOptions:
+    """Step 4's options: the length and shift groups, the joint convention, the held pose's
+    ties (held_frames: indices into the joint solve's frames)."""
     options = _core.CalibrationOptions()
     options.scale_group = group_indices(skel, LENGTH_GROUPS)
     options.shift_group = group_indices(skel, {g: bones for g, (bones, _) in SHIFT_GROUPS.items()})
@@ -278,40 +256,55 @@ def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_n
     options.estimate_sites = False
     options.scale_sigma = SCALE_SIGMA
     options.joint_sigmas = [np.array(JOINT_SIGMAS.get(b, (0.0, 0.0, 0.0))) for b in skel.bone_names]
-    pose = calibration_poses(skel).get(pose_name)
-    options.held_poses = [_held(j, pose) for j, f in enumerate(used) if f in held]
-    dense = len(used) * step >= DENSE * window
+    options.held_poses = [held(j, pose) for j in held_frames]
+    return options
+
+
+@dataclasses.dataclass
+class _Solved:
+    result: object  # _core.calibrate_window's, step 4 (with the accelerometer's headings when found)
+    accelerometer: dict[str, tuple[float, float]]  # per sensor (yaw rad, sigma rad; infinite: none)
+    layout: _core.KeypointLayout  # step 4b's sites, or step 4's layout
+    thetas: np.ndarray  # the window's poses
+    directions: np.ndarray  # (3 x keypoints, kept)
+
+
+def _solve_window(w: _Window, start: _Start, frames: list, starts: list, options: _core.CalibrationOptions,
+                  dense: bool, quick: bool, site_std: float) -> _Solved:
+    """Step 4, its accelerometer headings and step 4 again with them, then 4b (site_std > 0)."""
+    args = (start.skeleton, w.rig, start.layout, start.sites)
     try:
-        result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
-        accelerometer = _accelerometer_headings(result, rig, detections[:window], times[:window],
-                                                None if quick else readings, dense)
+        result = _core.calibrate_window(*args, prior.load(), frames, starts, options)
+        accelerometer = _accelerometer_headings(result, w.rig, w.detections, w.times, None if quick else w.readings,
+                                                dense)
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
-            options.heading_priors = [np.array(accelerometer[s.name]) for s in sites]
-            result = _core.calibrate_window(skel, rig, layout, sites, prior.load(), frames, starts, options)
-        sites_layout, thetas, directions = (_estimate_sites(result, rig, frames, options, site_std)
-                                            if estimate_sites else (result.layout, result.thetas, np.zeros((0, 0))))
+            options.heading_priors = [np.array(accelerometer[s.name]) for s in start.sites]
+            result = _core.calibrate_window(*args, prior.load(), frames, starts, options)
+        layout, thetas, directions = (_estimate_sites(result, w.rig, frames, options, site_std) if site_std > 0
+                                      else (result.layout, result.thetas, np.zeros((0, 0))))
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
-    report = {
-        "window_start_s": 0.0, "window_s": float(times[window - 1] - times[0]), "frames": len(frames), "step": step,
+    return _Solved(result, accelerometer, layout, thetas, directions)
+
+
+def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool, sites_estimated: bool,
+            pose_name: str | None, held_frames: int) -> dict:
+    result, skel = solved.result, start.skeleton
+    return {
+        "window_start_s": 0.0, "window_s": float(w.times[-1] - w.times[0]), "frames": frames, "step": w.step,
         "quick": quick,
         "iterations": result.iterations, "converged": result.converged,
         "cost": {"start": result.initial_cost, "end": result.final_cost},
-        "scales_start": start.scales,  # step 1, of the default skeleton's groups
+        "scales_start": start.estimate.scales,  # step 1, of the default skeleton's groups
         "scales_window": dict(zip(LENGTH_GROUPS, (float(s) for s in result.scales))),  # step 4, of step 1's
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
-        "sites_estimated": estimate_sites, "site_directions_kept": int(directions.shape[1]),
-        "calibration_pose": pose_name, "calibration_pose_frames": len(options.held_poses),
+        "sites_estimated": sites_estimated, "site_directions_kept": int(solved.directions.shape[1]),
+        "calibration_pose": pose_name, "calibration_pose_frames": held_frames,
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
-                          **_accelerometer_report(*accelerometer[s.name]),
+                          **_accelerometer_report(*solved.accelerometer[s.name]),
                           "mount": rotations.log(np.asarray(s.mount)).tolist()}
-                 for s, r0, r in zip(result.imus, first, result.imu_residual_deg)}}
-    imus = list(result.imus)
-    report["imu_positions"] = _place_imus(result.skeleton, rig, sites_layout, imus, detections[:window],
-                                          times[:window], readings, dense)
-    return Calibration(result.skeleton, sites_layout, imus, start, report, np.array(used), np.array(thetas),
-                       directions)
+                 for s, r0, r in zip(result.imus, start.residuals_deg, result.imu_residual_deg)}}
 
 
 def _estimate_sites(first, rig: _core.Rig, frames: list, options: _core.CalibrationOptions,
@@ -333,12 +326,6 @@ def _accelerometer_report(yaw: float, sigma: float) -> dict:
     if not np.isfinite(sigma):
         return {"heading_accelerometer_deg": None, "heading_accelerometer_sigma_deg": None}
     return {"heading_accelerometer_deg": float(np.degrees(yaw)), "heading_accelerometer_sigma_deg": float(np.degrees(sigma))}
-
-
-def _held(frame: int, pose: np.ndarray) -> _core.HeldPose:
-    h = _core.HeldPose()
-    h.frame, h.theta, h.sigma = frame, pose, HELD_SIGMA
-    return h
 
 
 def _window_motion(skel, rig, layout, imus: list, detections, times, readings: ImuReadings) -> np.ndarray:

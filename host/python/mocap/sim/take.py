@@ -1,5 +1,5 @@
 """A simulated take: a real motion (a BVH clip, or poses in memory such as
-mocap.demo_motion's) played in front of simulated cameras and IMUs.
+mocap.sim.demo_motion's) played in front of simulated cameras and IMUs.
 
 Presets as the paper: HQ detects on every frame with 8 cameras; HS on 2 consecutive
 frames of every 8 with 4 cameras; with the 13- or 6-IMU set. Cameras: positions on a
@@ -17,7 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths, retarget, rotations, studio
+from mocap import _core, paths, rotations
+from mocap.io import retarget
+from mocap.model import studio
 from mocap.sim import detector, imu, occlusion
 
 

@@ -1,7 +1,7 @@
 """The simulated studio written as a take folder (`mocap simulate --take-out DIR`), with the
 truth that a take from another tool would not carry, for the calibration's tests.
 
-The demo motion (mocap.demo_motion, 60 Hz) is played through mocap.sim.take: the told
+The demo motion (mocap.sim.demo_motion, 60 Hz) is played through mocap.sim.take: the told
 (perturbed) rig goes to Calib.toml, each camera's detections to OpenPose JSON (a camera that
 sees no keypoint in a frame, and every frame without detections, writes "people": []), and
 the IMUs are sampled at IMU_RATE on the take's clock (sample k at k / IMU_RATE s, video
@@ -23,12 +23,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, demo_motion, rotations
-from mocap.calibration import window
-from mocap.sim import imu
+from mocap import _core, rotations
+from mocap.io.take_folder import SEGMENT_BONES, ImuRecording, TakeFolder, write_take
+from mocap.io.xsens_csv import TICKS_PER_S
+from mocap.model.poses import calibration_poses
+from mocap.sim import demo_motion, imu
 from mocap.sim import take as sim_take
-from mocap.xsens_csv import TICKS_PER_S
-from mocap.take_folder import SEGMENT_BONES, ImuRecording, TakeFolder, write_take
 
 FRAME_RATE = 60.0  # Hz
 IMU_RATE = 100.0  # Hz: 100 SampleTimeFine ticks per sample
@@ -57,7 +57,7 @@ def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
              imu_errors: imu.ImuErrors = imu.ImuErrors(),
              calibration_pose: str | None = None, still_s: float = 0.0) -> tuple[TakeFolder, Truth]:
     """The take (IMU quaternions in each sensor's earth frame) and its truth; with a
-    calibration pose ("T" or "N", window.calibration_poses), the performer holds it for 1 s
+    calibration pose ("T" or "N", mocap.model.poses), the performer holds it for 1 s
     and blends into the motion over 0.5 s first; with still_s, stands still first for that
     long (in a pose of the motion, 3 s in) and blends into it over 0.5 s."""
     rng = np.random.default_rng(seed)
@@ -65,7 +65,7 @@ def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
     if still_s > 0:
         thetas = demo_motion.after_held_pose(thetas, thetas[min(len(thetas) - 1, round(3.0 / dt))], dt, still_s)
     if calibration_pose:
-        thetas = demo_motion.after_held_pose(thetas, window.calibration_poses(skeleton)[calibration_pose], dt)
+        thetas = demo_motion.after_held_pose(thetas, calibration_poses(skeleton)[calibration_pose], dt)
     config = sim_take.Config(preset=preset, imu=imu_errors)
     t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
     headings = rng.uniform(-180.0, 180.0, len(t.imus))

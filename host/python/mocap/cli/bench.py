@@ -1,0 +1,46 @@
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from mocap.demo import score as live
+from mocap.errors import DataMissingError
+from mocap.eval import bench, edge_detector
+from mocap.imu_node import bench as firmware_bench
+from mocap.io.demo_data import fetch_trial
+
+KINDS = ["solver", "live", "edge", "firmware"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
+    b.add_argument("--only", nargs="+", default=KINDS, choices=KINDS, help="benchmarks to run (default all)")
+    b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
+    b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
+    b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
+    b.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
+                   help="a solver option, e.g. function_tolerance=3e-2 or acceleration.weight=0 (repeatable)")
+    b.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
+        print(json.dumps(live.bench(seconds=args.live_seconds)), flush=True)
+    if "edge" in args.only:
+        try:
+            print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "edge", "skipped": str(e)}), flush=True)
+    if "firmware" in args.only:
+        print(json.dumps(firmware_bench.firmware()), flush=True)
+    bench.pin_to_one_core()
+    if "solver" in args.only:
+        try:
+            result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats, settings=args.set)
+            print(json.dumps(result), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
+    return 0

@@ -1,0 +1,29 @@
+"""`mocap replay FILE --bind EP`: a recording's messages published on ZeroMQ."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from mocap.recording import replay
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    rep = sub.add_parser("replay", help="publish a recording's messages on ZeroMQ, following their log times")
+    rep.add_argument("file", help="MCAP file made by `mocap record`")
+    rep.add_argument("--bind", required=True, metavar="EP", help="endpoint to publish on, tcp://*:port")
+    pace = rep.add_mutually_exclusive_group()
+    pace.add_argument("--speed", type=float, default=1.0, help="times real time (default 1)")
+    pace.add_argument("--max-speed", action="store_true", help="as fast as the subscribers take the messages")
+    rep.add_argument("--restamp", action="store_true", help="move the recorded times to now, so that a live host "
+                     "(mocapd) takes the replay for a take happening now")
+    rep.add_argument("--topics", nargs="+", default=None, metavar="PATTERN",
+                     help="topic patterns to send (default: the inputs, /camera/* /imu/* /calibration/*)")
+    rep.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    sent = replay.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics,
+                         restamp=args.restamp)
+    print(json.dumps({"file": args.file, "sent": sent}), flush=True)
+    return 0

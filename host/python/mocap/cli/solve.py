@@ -1,0 +1,55 @@
+"""`mocap solve`: a recording solved offline through the host's pipeline, or a take folder."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from mocap.errors import InputError
+from mocap.io.bvh_export import write_bvh
+from mocap.io.joints_csv import write_positions_csv
+from mocap.recording import offline, reader
+from mocap.takes import solve as take_solve
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    so = sub.add_parser("solve", help="solve a recording offline through the host's pipeline (--out a BVH), or a take "
+                        "folder (--out a folder: joints.csv, take.bvh, calibration report)")
+    so.add_argument("--recording", default=None, help="MCAP file of `mocap record` / `mocap demo --record`")
+    so.add_argument("--take", default=None, help="take folder (docs/take_format.md)")
+    so.add_argument("--session", default=None, help="session file (default: the one attached to the recording)")
+    so.add_argument("--out", required=True, help="BVH to write (--recording) or output folder (--take)")
+    so.add_argument("--csv", default=None, help="also write joint positions as CSV")
+    so.set_defaults(func=run)
+
+
+def _take(args: argparse.Namespace) -> int:
+    report = take_solve.solve_take(Path(args.take), Path(args.out))
+    print(json.dumps({"frames": report["frames"], "out": args.out, "skeleton_scales": report["skeleton"]["scales"]}),
+          flush=True)
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    if bool(args.recording) == bool(args.take):
+        raise InputError("give exactly one of --recording FILE and --take DIR")
+    if args.take:
+        return _take(args)
+    with tempfile.TemporaryDirectory() as folder:
+        session = Path(args.session) if args.session else reader.read_session(args.recording, folder)
+        if session is None:
+            raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
+        poses, dropped, skeleton = offline.solve_recording(Path(args.recording), session)
+    if not poses:
+        raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped})")
+    thetas = np.array([list(p.theta) for p in poses])
+    write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))  # the latest calibration's skeleton
+    if args.csv:  # the bones as solved, each frame with the calibration in use then
+        times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
+        write_positions_csv(args.csv, skeleton.bone_names, offline.joint_positions(poses), times)
+    print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped}), flush=True)
+    return 0

@@ -1,0 +1,134 @@
+"""The simulated studio (mocap.demo.studio) played live: mocapd, one camera box per camera
+(`python -m mocap_edge camera --source sim:STREAMS`: the box's own loop on the simulated
+backend), the IMU hub and, for a live calibration, the live calibrator — all on loopback —
+and a consumer collecting PoseFrame and Health until the take ends."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import zmq
+
+from mocap import paths
+from mocap.demo.studio import Studio
+from mocap.errors import InputError
+from mocap.net import transport, wire
+from mocap.recording import recorder
+
+MOCAPD = paths.REPO / "build" / "host" / "mocapd"
+LEAD_S = 4.0  # between launching the processes and the take's first frame
+
+
+def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple | None = None) -> list[str]:
+    """The camera box of camera c on the simulated backend (its detection latency seeded by
+    c); unplugged (camera id, from_s, to_s): that box is unplugged during the span."""
+    camera = studio.camera_ids[c]
+    cmd = [sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{studio.streams}", "--camera", camera,
+           "--bind", studio.endpoints[camera], "--start-ns", str(start_ns), "--seed", str(c)]
+    if studio.detect_every[0] > 1:
+        cmd += ["--hs", *map(str, studio.detect_every)]
+    if unplugged and unplugged[0] == camera:
+        cmd += ["--stop", *map(str, unplugged[1:])]
+    return cmd
+
+
+def _imu_hub_command(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[str]:
+    """The IMU hub; unplugged (sensor id, from_s, to_s): that sensor stops during the span."""
+    cmd = [sys.executable, "-m", "mocap_edge", "imu-hub", "--streams", str(studio.streams),
+           "--bind", studio.endpoints["hub0"], "--start-ns", str(start_ns)]
+    if unplugged:
+        cmd += ["--stop-sensor", unplugged[0], "--stop", *map(str, unplugged[1:])]
+    return cmd
+
+
+def _calibrator_command(studio: Studio, duration: float) -> list[str]:
+    """The live calibrator beside mocapd (`mocap calibrate --follow`)."""
+    edge_endpoints = [studio.endpoints[c] for c in [*studio.camera_ids, "hub0"]]
+    return [sys.executable, "-m", "mocap.cli", "calibrate", "--connect", *edge_endpoints,
+            "--session", str(studio.session), "--out", str(studio.calibrated), "--follow",
+            "--publish", studio.calibrator, "--duration", f"{LEAD_S + duration + 1.0:.3f}"]
+
+
+@dataclasses.dataclass
+class Run:
+    poses: list  # PoseFrame messages in arrival order
+    healths: list
+    host_summary: dict
+    start_ns: int
+
+
+def _collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
+             on_pose: Callable | None) -> tuple[list, list]:
+    """PoseFrame and Health messages from mocapd until it exits; each Health to progress,
+    each PoseFrame to on_pose."""
+    poses, healths = [], []
+    while host.poll() is None:
+        if not sub.poll(200):
+            continue
+        while True:
+            try:
+                frames = sub.recv_multipart(zmq.NOBLOCK)
+            except zmq.Again:
+                break
+            try:
+                msg = wire.decode(frames)
+            except wire.WireError:
+                continue
+            if isinstance(msg, wire.PoseFrame):
+                poses.append(msg)
+                if on_pose:
+                    on_pose(msg)
+            elif isinstance(msg, wire.Health):
+                healths.append(msg)
+                if progress:
+                    progress(msg)
+    return poses, healths
+
+
+def play(studio: Studio, progress: Callable | None = None, faults: dict | None = None, on_pose: Callable | None = None,
+         record: Path | None = None) -> Run:
+    """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
+    loopback, until the take ends. progress(health) is called once a second; on_pose(pose)
+    for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}."""
+    if not MOCAPD.exists():
+        raise InputError(f"{MOCAPD} is missing: run `make build`")
+    faults = faults or {}
+    duration = float(studio.frame_times[-1])
+    start_ns = time.time_ns() + int(LEAD_S * 1e9)
+    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
+                             "--quiet"], stdout=subprocess.PIPE, text=True)
+    commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
+    commands.append(_imu_hub_command(studio, start_ns, faults.get("imu")))
+    if studio.calibrator:
+        commands.append(_calibrator_command(studio, duration))
+    edge = [subprocess.Popen(cmd) for cmd in commands]
+    recorder_thread, stop = None, threading.Event()
+    if record:
+        inputs = [*studio.endpoints.values(), *([studio.calibrator] if studio.calibrator else [])]
+        recorder_thread = threading.Thread(target=recorder.record, args=(inputs, record),
+                                           kwargs={"stop": stop, "session": studio.session}, daemon=True)
+        recorder_thread.start()
+    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]])
+    try:
+        poses, healths = _collect(host, sub, progress, on_pose)
+        lines = host.stdout.read().strip().splitlines()
+        if host.wait() != 0 or not lines:
+            raise InputError(f"mocapd stopped with status {host.returncode} (its log is above)")
+        summary = json.loads(lines[-1])
+    finally:
+        for p in [*edge, host]:
+            if p.poll() is None:
+                p.terminate()
+            p.wait(timeout=10)
+        sub.close()
+        stop.set()
+        if recorder_thread:
+            recorder_thread.join(timeout=10)
+    return Run(poses, healths, summary, start_ns)

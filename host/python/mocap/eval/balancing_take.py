@@ -1,0 +1,52 @@
+"""Pose2Sim's Balancing trial (mocap.io.demo_data.fetch_trial) as a take folder: its four
+cameras' OpenPose BODY_25B detections and Qualisys calibration, nothing else (no IMUs) —
+and the comparison of a solve of it with Pose2Sim's own triangulated TRC."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from mocap.eval import real_trial
+from mocap.io import retarget
+from mocap.io.demo_data import TRIAL
+from mocap.io.trc import read_trc
+
+# joints.csv columns -> Pose2Sim's TRC markers (triangulated OpenPose keypoints). Our "head"
+# joint is the head bone's origin, the top of the neck: BODY_25B's UpperNeck ("Neck" in the
+# TRC), not its HeadTop ("Head").
+MARKERS = {"head": "Neck", "left_shoulder": "LShoulder", "right_shoulder": "RShoulder", "left_elbow": "LElbow",
+           "right_elbow": "RElbow", "left_wrist": "LWrist", "right_wrist": "RWrist", "left_hip": "LHip",
+           "right_hip": "RHip", "left_knee": "LKnee", "right_knee": "RKnee", "left_ankle": "LAnkle",
+           "right_ankle": "RAnkle"}
+
+
+def write(trial: Path, folder: Path) -> Path:
+    """A take folder referring to the trial's files (take.toml only)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    poses = ", ".join(f'"{trial / "pose" / f"cam{c}_json"}"' for c in range(1, 5))
+    (folder / "take.toml").write_text(
+        "[take]\nframe_rate = 60\nn_frames = 100\nworld_up_axis = \"Z\"\nunits = \"m\"\n\n"
+        f"[video]\ncalibration = \"{trial / 'Calib_qualisys.toml'}\"\n"
+        "camera_names = [\"cam_01\", \"cam_02\", \"cam_03\", \"cam_04\"]\n"
+        f"pose_dirs = [{poses}]\nkeypoint_layout = \"BODY_25B\"\n")
+    return folder
+
+
+def compare(trial: Path, joints_csv: Path, rate: float = 60.0) -> dict:
+    """Distance of the solved joint centres to Pose2Sim's markers (calibration world: the
+    TRC's Y-up axes rotated as retarget.P), and both jitters (mean |second difference| x rate^2)."""
+    trc = read_trc(trial / TRIAL)
+    reference = trc.markers @ retarget.P.T
+    rows = list(csv.reader(open(joints_csv)))
+    header, values = rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
+    ours = np.stack([values[:, [header.index(f"{j}_{a}") for a in "xyz"]] for j in MARKERS], axis=1)
+    theirs = reference[:, [trc.names.index(m) for m in MARKERS.values()]]
+    n = min(len(ours), len(theirs))
+    d = np.linalg.norm(ours[:n] - theirs[:n], axis=-1)
+    return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)),
+            "per_joint_cm": {j: 100 * float(np.nanmean(d[:, i])) for i, j in enumerate(MARKERS)},
+            "jitter_ours_ms2": real_trial.jitter(ours[:n], rate),
+            "jitter_pose2sim_ms2": real_trial.jitter(theirs[:n], rate)}

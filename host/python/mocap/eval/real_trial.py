@@ -1,0 +1,110 @@
+"""Video-only solve of the real Balancing trial (mocap.io.demo_data.fetch_trial): the edge
+detector's BlazePose keypoints of the four real cameras, the shipped Qualisys calibration,
+the host solver (E_P and the prior; no IMUs in this trial), compared with Pose2Sim's own
+triangulated result (its TRC).
+
+Skeleton: fitted to Pose2Sim's TRC (mocap.sim.demo_motion.body_model) — the subject's own
+proportions, taken from the reference (estimating it from video is the calibration's job: mocap.calibration).
+The TRC is Y-up; its axes in the calibration's world frame are the axis permutation whose
+projection best matches the shipped OpenPose detections (found, not assumed). Compared: the
+21 TRC markers against the same points (sites of the fitted body) on our solved skeleton.
+Jitter: mean |second difference| of those points x rate^2 (m/s^2), ours and the TRC's.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core, paths
+from mocap.eval import edge_detector
+from mocap.io import calib_toml
+from mocap.io.demo_data import TRIAL
+from mocap.io.trc import Trc, read_trc
+from mocap.model import studio
+from mocap.model.solver import Solver
+from mocap.sim import demo_motion
+
+RATE = 60.0
+# TRC marker -> OpenPose BODY_25B index, to find the TRC's axes.
+BODY25B = {"Nose": 0, "LShoulder": 5, "RShoulder": 6, "LElbow": 7, "RElbow": 8, "LWrist": 9, "RWrist": 10,
+           "LHip": 11, "RHip": 12, "LKnee": 13, "RKnee": 14, "LAnkle": 15, "RAnkle": 16}
+
+
+def _rotations() -> list[np.ndarray]:
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product([1, -1], repeat=3):
+            r = np.zeros((3, 3))
+            r[range(3), perm] = signs
+            if np.isclose(np.linalg.det(r), 1):
+                out.append(r)
+    return out
+
+
+def trc_axes(rig: _core.Rig, trc: Trc, openpose: list[list[np.ndarray]]) -> np.ndarray:
+    """The proper axis permutation R (calibration world = R @ TRC) whose projections of the
+    TRC markers lie nearest OpenPose's keypoints (median pixel distance)."""
+    idx = [trc.names.index(n) for n in BODY25B]
+    best, best_err = None, np.inf
+    for r in _rotations():
+        errs = []
+        for c, cam in enumerate(rig.cameras):
+            for f in range(0, len(trc.markers), 10):
+                px, ok = cam.project(trc.markers[f, idx] @ r.T)
+                op = openpose[c][f][list(BODY25B.values())]
+                use = ok & (op[:, 2] > 0)
+                errs += list(np.linalg.norm(px[use] - op[use, :2], axis=1))
+        err = np.median(errs) if errs else np.inf
+        if err < best_err:
+            best, best_err = r, err
+    return best
+
+
+def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) -> dict:
+    """keypoints (C, F, 33, 3) BlazePose pixels + confidence (0 where not detected)."""
+    rig = calib_toml.load(trial / "Calib_qualisys.toml")
+    trc = read_trc(trial / TRIAL)
+    body = demo_motion.body_model(trc.names, demo_motion.world_markers(trc))
+    skeleton = body.skeleton
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "blazepose33.json"), skeleton).scaled_to(skeleton)
+    r = trc_axes(rig, trc, openpose)
+    reference = trc.markers @ r.T  # (F, M, 3) calibration world
+    solver = Solver(skeleton, rig, layout, [])
+    cams = list(range(len(rig.cameras)))
+    solved = []
+    for f in range(keypoints.shape[1]):
+        result = solver.solve(f / RATE, cams, keypoints[:, f], [], np.zeros((0, 4)), np.zeros((0, 3)))
+        solved.append(studio.site_positions(skeleton, body.bones, body.offsets, result.theta))
+    solved = np.array(solved)
+    n = min(len(solved), len(reference))
+    d = np.linalg.norm(solved[:n] - reference[:n], axis=-1)  # (F, M)
+    return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)), "distance_median_cm": 100 * float(np.nanmedian(d)),
+            "per_marker_cm": {m: 100 * float(np.nanmean(d[:, i])) for i, m in enumerate(trc.names)},
+            "jitter_ours_ms2": jitter(solved[:n]), "jitter_pose2sim_ms2": jitter(reference[:n]),
+            "trc_axes": r.astype(int).tolist()}
+
+
+def jitter(x: np.ndarray, rate: float = RATE) -> float:
+    """Mean |second difference| of points (F, ..., 3) x rate^2, m/s^2."""
+    return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * rate**2)
+
+
+def evaluate(trial: Path) -> dict:
+    """`mocap eval-edge`: the edge detector's PCK and speed (mocap.eval.edge_detector)
+    and the video-only solve of its keypoints against Pose2Sim's TRC."""
+    videos = edge_detector.load_trial(trial)
+    model = edge_detector.BlazePose()
+    found, speed = edge_detector.run(model, videos)
+    naive, naive_speed = edge_detector.run(model, videos, pack=False)
+    keypoints = np.zeros((len(found), len(videos[edge_detector.CAMERAS[0]]), 33, 3))
+    for i, c in enumerate(edge_detector.CAMERAS):
+        for f, person in enumerate(found[c]):
+            if person is not None:
+                keypoints[i, f] = person.keypoints
+    openpose = [edge_detector.openpose_subjects(trial, c) for c in edge_detector.CAMERAS]
+    return {"detector_tracked": edge_detector.pck(trial, found) | speed,
+            "detector_naive": edge_detector.pck(trial, naive) | naive_speed,
+            "video_only_solve": solve(trial, keypoints, openpose)}

@@ -1,0 +1,106 @@
+"""The fused solver (or a baseline) on simulated takes of real motion: `mocap eval`. Each
+take is simulated (mocap.sim.take), calibrated from its own first seconds or given the
+truth's calibration (oracle), solved frame by frame, and scored (mocap.eval.metrics), with
+the per-frame solve time."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap import _core
+from mocap.calibration import informative, window
+from mocap.calibration.readings import ImuReadings
+from mocap.eval import baselines
+from mocap.eval.metrics import calibration_errors, errors, floor_cm
+from mocap.model.solver import Solver, solver_options
+from mocap.sim import take as sim_take
+
+TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation"}
+
+
+def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOptions:
+    """Solver options with the omitted terms off and "name=value" settings applied."""
+    options = solver_options(list(settings))
+    for term in omit:
+        t = getattr(options, TERMS[term])
+        t.enabled = False
+        setattr(options, TERMS[term], t)
+    return options
+
+
+def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Calibration | None = None,
+          headings: list | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Solved poses (F, 66) and solve times (F,) ms of a take, with the oracle calibration
+    (the take's skeleton, nominal layout and true IMU sites) or an estimated one; `headings`,
+    when given, receives each frame's heading corrections (rad, Solver.headings)."""
+    c = calibration
+    solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
+              else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
+    sensors = list(range(len(t.imus) if c is None else len(c.imus)))  # a calibration may leave them out
+    thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
+    for f in range(len(t.thetas)):
+        kp = t.keypoints[f]
+        cams = list(range(len(t.rig.cameras))) if kp is not None else []
+        kp = kp if kp is not None else np.zeros((0, len(t.layout), 3))
+        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f, sensors], t.accelerations[f, sensors])
+        thetas[f], ms[f] = r.theta, r.solve_time_ms
+        if headings is not None:
+            headings.append(list(solver.headings))
+    return thetas, ms
+
+
+def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
+    """The take's calibration from its own seconds (mocap.calibration.window, with its keyword
+    options), chosen as `mocap solve --take` chooses them (informative.calibration_window):
+    nothing of the truth is used (the IMU readings' reference frames are treated as unknown
+    too). IMUs too still to calibrate are left out (the calibration has none)."""
+    cams, k = len(t.rig.cameras), len(t.layout)
+    det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
+    readings = ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions, t.accelerations)
+    detected = np.array([kp is not None for kp in t.keypoints])  # HS: the detector runs on 2 of 8 frames
+    return informative.estimate(t.rig, det, t.times, t.layout.name, readings, detected=detected, **options)[0]
+
+
+def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
+             baseline: str | None = None, calibration: str = "oracle", calibration_options: dict | None = None) -> dict:
+    """Scores the fused solver, or a baseline: "imu-only" or "triangulation" (mocap.eval.baselines).
+    calibration: "oracle" (the true skeleton and IMU mounting) or "estimated" (fused solver
+    only; calibration_options: keyword options of window.estimate)."""
+    rng = np.random.default_rng(seed)
+    t = sim_take.simulate(clip, config, rng)
+    estimated = (estimate_calibration(t, **(calibration_options or {}))
+                 if calibration == "estimated" and baseline is None else None)
+    if baseline == "imu-only":
+        solved, ms = baselines.imu_only(t), np.zeros(len(t.thetas))
+    elif baseline == "triangulation":
+        solved, ms = baselines.video_only(t), np.zeros(len(t.thetas))
+    else:
+        options = options_for(omit, settings)
+        if estimated and not any(s.startswith("heading_time_constant=") for s in settings):
+            options = window.solver_options(options)
+        solved, ms = solve(t, options, estimated)
+    result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate, estimated.skeleton if estimated else None)
+    result.update({"clip": str(clip), "method": baseline or "fused", "preset": config.preset,
+                   "cameras": len(t.rig.cameras),
+                   "imus": len(t.imus), "omit": omit, "settings": list(settings),
+                   "site_offsets": config.detector.site_offsets,
+                   "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
+                   "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
+    if estimated:
+        result["calibration_report"] = estimated.report
+        result["calibration_errors"] = calibration_errors(t, estimated)
+    return result
+
+
+def summarise(results: list[dict]) -> dict:
+    """Means over clips (weighted by frames) of the headline metrics, and every clip's result."""
+    frames = np.array([r["frames"] for r in results], dtype=float)
+    mean = {k: float(np.average([r[k] for r in results], weights=frames))
+            for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm",
+                      "joint_centres_vel_cms", "floor_cm")}
+    first = results[0]
+    return {**mean, "frames": int(frames.sum()), "solve_ms_median": float(np.median([r["solve_ms_median"] for r in results])),
+            "calibration": first["calibration"], "method": first["method"], "preset": first["preset"],
+            "cameras": first["cameras"],
+            "imus": first["imus"], "omit": first["omit"], "site_offsets": first["site_offsets"], "seed": first["seed"],
+            "clips": results}

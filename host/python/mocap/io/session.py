@@ -1,0 +1,159 @@
+"""The host's session file: what mocapd solves and where the streams are (format
+mocap.session/1, read by mocapd: host/daemon/session.h).
+
+    {"format": "mocap.session/1",
+     "skeleton": path, "rig": path, "layout": path, "imus": path, "prior": path or null,
+     "inputs": ["tcp://edge-box-1:5600", ...], "output": "tcp://*:5700",
+     "sync": {"max_wait_ms": 25, ...}, "solver": {"heading_time_constant": 1, ...},
+     "imus_calibrated": true}
+
+Paths are relative to the session file. `Session` is the one reader and writer of the
+Python tools (the calibration, the demo's studio, a recording's attachment): it refuses
+what mocapd refuses — an unknown key anywhere, a "sync" value that is not a number, a
+"solver" object mocapd's own parser rejects (an unknown option, a value of the wrong type or
+out of range) — so nothing written here is dropped or refused by mocapd. "sync" and "solver"
+hold only the settings that differ from mocapd's defaults.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+from mocap import _core
+from mocap.errors import InputError
+
+FORMAT = "mocap.session/1"
+FILES = ("skeleton", "rig", "layout", "imus", "prior")  # the keys that name files
+
+
+@dataclasses.dataclass
+class SyncSettings:
+    """The "sync" object: the synchroniser's times (ms) and its frame rate without cameras
+    (Hz); None keeps mocapd's default (host/include/mocap/stream_sync.h). The fields are the
+    keys mocapd reads (_core.session_sync_keys(); a test fails when they differ)."""
+    group_tolerance_ms: float | None = None
+    max_wait_ms: float | None = None
+    stale_after_ms: float | None = None
+    imu_max_gap_ms: float | None = None
+    imu_max_hold_ms: float | None = None
+    imu_history_ms: float | None = None
+    imu_only_rate_hz: float | None = None
+
+    def to_json(self) -> dict[str, float]:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if getattr(self, f.name) is not None}
+
+    @classmethod
+    def from_json(cls, data: Any, where: str) -> SyncSettings:
+        if not isinstance(data, dict):
+            raise InputError(f"{where}: sync must be an object")
+        known = [f.name for f in dataclasses.fields(cls)]
+        for key, value in data.items():
+            if key not in known:
+                raise InputError(f"{where}: unknown sync option '{key}' (known: {', '.join(known)})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise InputError(f"{where}: sync option '{key}' must be a number")
+        return cls(**data)
+
+
+@dataclasses.dataclass
+class Session:
+    """A session file's contents. File names are as written (relative to `base`, the
+    session file's folder, or absolute); `file(key)` resolves one."""
+    skeleton: str
+    rig: str
+    layout: str
+    imus: str
+    inputs: list[str]  # every edge box, IMU hub and calibrator (PUB, bound there)
+    output: str  # where mocapd publishes PoseFrame and Health
+    prior: str | None = None  # None: no prior terms
+    sync: SyncSettings = dataclasses.field(default_factory=SyncSettings)
+    # The "solver" object: SolverOptions fields by name, a term's as {"term": {"field": value}}
+    # (_core.session_solver_keys()); the ones absent keep mocapd's defaults.
+    solver: dict[str, Any] = dataclasses.field(default_factory=dict)
+    imus_calibrated: bool = True  # False: mocapd waits for a Calibration before using the IMUs
+    base: Path = dataclasses.field(default=Path("."), compare=False)  # not written
+
+    def file(self, key: str) -> Path | None:
+        """The file named under `key` (one of FILES), resolved against `base`; None for no prior."""
+        name = getattr(self, key)
+        return None if name is None else self.base / name
+
+    def solver_options(self) -> _core.SolverOptions:
+        """The solver options mocapd solves with: its defaults, then "solver"."""
+        return _parse_solver(self.solver, "session")
+
+    def with_solver(self, **settings: Any) -> Session:
+        """A copy whose "solver" object has these settings too (SolverOptions fields by name)."""
+        return dataclasses.replace(self, solver={**self.solver, **settings})
+
+    def to_json(self) -> dict[str, Any]:
+        self._check("session")
+        out: dict[str, Any] = {"format": FORMAT}
+        out.update({key: getattr(self, key) for key in FILES})
+        out.update({"inputs": list(self.inputs), "output": self.output})
+        if self.sync.to_json():
+            out["sync"] = self.sync.to_json()
+        if self.solver:
+            out["solver"] = self.solver
+        out["imus_calibrated"] = self.imus_calibrated
+        return out
+
+    def dumps(self) -> str:
+        return json.dumps(self.to_json(), indent=1)
+
+    def save(self, path: str | Path) -> Path:
+        """Writes the session file (its files are not copied: their names are written as they are)."""
+        path = Path(path)
+        path.write_text(self.dumps())
+        return path
+
+    @classmethod
+    def from_json(cls, data: Any, base: Path = Path("."), where: str = "session") -> Session:
+        """A session from its JSON object; InputError names what mocapd would refuse."""
+        if not isinstance(data, dict):
+            raise InputError(f"{where}: a session is a JSON object")
+        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated")
+        unknown = [key for key in data if key not in known]
+        if unknown:
+            raise InputError(f"{where}: unknown session key '{unknown[0]}'")
+        if data.get("format") != FORMAT:
+            raise InputError(f"{where}: format is not {FORMAT}")
+        missing = [key for key in ("skeleton", "rig", "layout", "imus", "inputs", "output") if key not in data]
+        if missing:
+            raise InputError(f"{where}: no {', '.join(missing)}")
+        session = cls(data["skeleton"], data["rig"], data["layout"], data["imus"], list(data["inputs"]),
+                      data["output"], data.get("prior"), SyncSettings.from_json(data.get("sync", {}), where),
+                      dict(data.get("solver", {})), data.get("imus_calibrated", True), Path(base))
+        session._check(where)
+        return session
+
+    @classmethod
+    def load(cls, path: str | Path) -> Session:
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except json.JSONDecodeError as e:
+            raise InputError(f"{path}: not JSON ({e})") from None
+        return cls.from_json(data, path.parent, str(path))
+
+    def _check(self, where: str) -> None:
+        names = [getattr(self, key) for key in FILES if key != "prior"]
+        if not all(isinstance(n, str) and n for n in names) or not (self.prior is None or isinstance(self.prior, str)):
+            raise InputError(f"{where}: the files ({', '.join(FILES)}) are named by strings (prior: or null)")
+        if not self.inputs or not all(isinstance(i, str) for i in self.inputs) or not isinstance(self.output, str):
+            raise InputError(f"{where}: inputs is a non-empty list of endpoints and output an endpoint")
+        if not isinstance(self.imus_calibrated, bool):
+            raise InputError(f"{where}: imus_calibrated is true or false")
+        SyncSettings.from_json(self.sync.to_json(), where)
+        _parse_solver(self.solver, where)
+
+
+def _parse_solver(solver: dict[str, Any], where: str) -> _core.SolverOptions:
+    """The options of a "solver" object, parsed by mocapd's own reader."""
+    try:
+        return _core.SolverOptions.from_session_json(json.dumps(solver))
+    except ValueError as e:
+        raise InputError(f"{where}: solver: {e}") from None

@@ -1,0 +1,167 @@
+"""Recording the streams to MCAP files (reading them back: mocap.recording.reader).
+
+A recording has one channel per stream, its topic taken from the message:
+
+| message | topic | publish_time (the message's own time) |
+|---|---|---|
+| KeypointFrame | /camera/<camera_id> | capture_time_ns |
+| ImuBatch | /imu/<hub_id> | send_time_ns |
+| PoseFrame | /pose | capture_time_ns |
+| Health | /health/<source> | time_ns |
+| Calibration | /calibration/<source> | valid_from_ns |
+
+log_time is the arrival time at the recorder (time.time_ns()). Messages are stored as the
+received bytes (message encoding "protobuf"), so fields unknown to this version survive.
+Each message type has one schema: encoding "protobuf", name = full type name, data = a
+serialised FileDescriptorSet of the type's .proto file and all its dependencies. A
+recording is thus self-describing (Foxglove opens it as is; reading needs no generated code).
+A session attached (`attach_session`) travels as attachments session/session.json and the
+files it names (mocap.recording.reader.read_session extracts them).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+import zmq
+from google.protobuf import descriptor_pb2
+from google.protobuf.message import Message
+from mcap.writer import Writer
+
+from mocap.io.session import FILES, Session
+from mocap.net import transport, wire
+
+log = logging.getLogger(__name__)
+
+POLL_MS = 100  # how often `record` checks its stop conditions
+
+
+@dataclasses.dataclass(frozen=True)
+class Counts:
+    recorded: dict[str, int]  # per topic
+    dropped: dict[str, int]  # per wire.WireError reason
+
+
+def topic_and_time(message) -> tuple[str, int]:
+    """The MCAP topic of a decoded message, and its own time (ns; see the module docstring)."""
+    match message:
+        case wire.KeypointFrame():
+            return f"/camera/{message.camera_id}", message.capture_time_ns
+        case wire.ImuBatch():
+            return f"/imu/{message.hub_id}", message.send_time_ns
+        case wire.PoseFrame():
+            return "/pose", message.capture_time_ns
+        case wire.Health():
+            return f"/health/{message.source}", message.time_ns
+        case wire.Calibration():
+            return f"/calibration/{message.source}", message.valid_from_ns
+    raise TypeError(f"no topic for {type(message).__name__}")
+
+
+def file_descriptor_set(message_descriptor) -> bytes:
+    """The serialised FileDescriptorSet of a message type's file and its dependencies, dependencies first."""
+    files = descriptor_pb2.FileDescriptorSet()
+    seen: set[str] = set()
+
+    def add(file) -> None:
+        if file.name in seen:
+            return
+        seen.add(file.name)
+        for dependency in file.dependencies:
+            add(dependency)
+        file.CopyToProto(files.file.add())
+
+    add(message_descriptor.file)
+    return files.SerializeToString()
+
+
+class Recorder:
+    """Writes well-formed mocap.v1 messages to an MCAP file; counts and skips the others."""
+
+    def __init__(self, path: str | Path, on_record: Callable[[str, Message], None] | None = None):
+        """on_record, if given, is called with the topic and the decoded message of every
+        recorded message (progress, a calibration's watch on the motion, tests)."""
+        self._on_record = on_record
+        self._writer = Writer(str(path))
+        self._writer.start(profile="protobuf", library="mocap recording")
+        self._schema_ids: dict[str, int] = {}
+        self._channel_ids: dict[str, int] = {}
+        self._closed = False
+        self.recorded: Counter[str] = Counter()
+        self.dropped: Counter[str] = Counter()
+
+    def write(self, frames: list[bytes], log_time_ns: int) -> bool:
+        """Records a two-frame [type, payload] message received at log_time_ns; False if it was dropped."""
+        try:
+            message = wire.decode(frames)
+        except wire.WireError as e:
+            self.dropped[e.reason] += 1
+            log.debug("dropped: %s", e)
+            return False
+        topic, own_time_ns = topic_and_time(message)
+        self._writer.add_message(self._channel_id(topic, message.DESCRIPTOR), log_time=log_time_ns,
+                                 data=bytes(frames[1]), publish_time=max(own_time_ns, 0))  # MCAP times are unsigned
+        self.recorded[topic] += 1
+        if self._on_record is not None:
+            self._on_record(topic, message)
+        return True
+
+    def attach_session(self, session: str | Path) -> None:
+        """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
+        prior), so that the recording can be solved without them (reader.read_session)."""
+        config = Session.load(session)
+        renamed = {}
+        for key in FILES:
+            source = config.file(key)
+            if source is not None:
+                self._attach(f"session/{key}.json", source.read_bytes())
+                renamed[key] = f"{key}.json"
+        self._attach("session/session.json", dataclasses.replace(config, **renamed).dumps().encode())
+
+    def _attach(self, name: str, data: bytes) -> None:
+        now = time.time_ns()
+        self._writer.add_attachment(create_time=now, log_time=now, name=name, media_type="application/json", data=data)
+
+    def counts(self) -> Counts:
+        return Counts(dict(self.recorded), dict(self.dropped))
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._writer.finish()  # writes the index and closes the file
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _channel_id(self, topic: str, descriptor) -> int:
+        if topic not in self._channel_ids:
+            name = descriptor.full_name
+            if name not in self._schema_ids:
+                self._schema_ids[name] = self._writer.register_schema(name, "protobuf", file_descriptor_set(descriptor))
+            self._channel_ids[topic] = self._writer.register_channel(topic, "protobuf", self._schema_ids[name])
+        return self._channel_ids[topic]
+
+
+def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
+           stop: threading.Event | None = None, on_record: Callable[[str, Message], None] | None = None,
+           session: str | Path | None = None) -> Counts:
+    """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is
+    set; with the session's files attached when given."""
+    deadline = None if seconds is None else time.monotonic() + seconds
+    stop = stop or threading.Event()
+    with Recorder(path, on_record) as recorder, zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
+        if session is not None:
+            recorder.attach_session(session)
+        while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
+            if socket.poll(POLL_MS):
+                recorder.write(socket.recv_multipart(), time.time_ns())
+        return recorder.counts()

@@ -1,0 +1,1 @@
+"""Take folders (docs/take_format.md) solved without oracles: `mocap solve --take`."""
