@@ -149,6 +149,7 @@ def test_pose2sims_balancing_trial_as_a_take_lands_near_its_own_3d(tmp_path):
 
 def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated):
     from mocap.calibration import window
+    from mocap.calibration.calibration_input import CalibrationInput
     from mocap.errors import InputError
     from mocap.io.take_folder import read_take
 
@@ -156,7 +157,8 @@ def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated):
     det = take_solve.subject(take)
     det[:, 1:] = 0.0  # only the first camera saw anything
     with pytest.raises(InputError, match="two cameras"):
-        window.estimate(take.rig, det, np.arange(take.n_frames) / take.frame_rate, take.layout, None)
+        window.estimate(take.rig, CalibrationInput.from_arrays(det, np.arange(take.n_frames) / take.frame_rate,
+                                                               take.layout, None))
 
 
 def test_solve_wants_exactly_one_input(tmp_path):

@@ -24,6 +24,7 @@ import numpy as np
 
 from mocap import _core
 from mocap.calibration import informative, window
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.readings import readings_at
 from mocap.errors import InputError
 from mocap.io.session import Session
@@ -145,11 +146,12 @@ def estimate(messages: Iterable[tuple[str, bytes]], session: Path, seconds: floa
     sensors = [(s.name, s.bone, *found) for s in imu_set if (found := _sensor(samples.get(s.name, []), t0))]
     frame_times = (times_ns - t0) * 1e-9
     readings = readings_at(frame_times, sensors) if sensors else None
-    first, score, why_not = informative.calibration_window(det, frame_times, readings, seconds)
+    data = CalibrationInput.from_arrays(det, frame_times, layout, readings)
+    first, score, why_not = informative.calibration_window(data, seconds)
     if why_not:
         raise InputError(f"{where}: {why_not.split(';')[0]}: the performer should move (walk, "
                          f"swing the arms, bend) while the studio calibrates")
-    cal = window.estimate(rig, det, frame_times, layout, readings, seconds=seconds, first_frame=first, quick=quick)
+    cal = window.estimate(rig, data, seconds=seconds, first_frame=first, quick=quick)
     used = [s[0] for s in sensors]
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from mocap import rotations
-from mocap.calibration.readings import ImuReadings
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.window import SECONDS, Calibration
 from mocap.calibration.window import estimate as window_estimate
 
@@ -78,15 +78,13 @@ def choose_window(times: np.ndarray, quaternions: np.ndarray, seen: np.ndarray, 
     return best
 
 
-def calibration_window(detections: np.ndarray, times: np.ndarray, readings: ImuReadings | None,
-                       seconds: float, detected: np.ndarray | None = None) -> tuple[int, float | None, str | None]:
+def calibration_window(data: CalibrationInput, seconds: float) -> tuple[int, float | None, str | None]:
     """(first frame, motion score, why the IMUs cannot be used or None) of the window to
-    calibrate from, for detections (F, C, K, 3) at times (F,) (detected: choose_window's):
-    with IMUs, choose_window's; without, the first seconds."""
-    if readings is None:
+    calibrate from: with IMUs, choose_window's; without, the first seconds."""
+    if data.readings is None:
         return 0, None, None
-    seen = (detections[..., 2] > 0).any(axis=2).sum(axis=1) >= 2
-    start, score = choose_window(times, readings.quaternions, seen, seconds, detected=detected)
+    seen = (data.detections[..., 2] > 0).any(axis=2).sum(axis=1) >= 2
+    start, score = choose_window(data.times, data.readings.quaternions, seen, seconds, detected=data.detected)
     if not np.isfinite(score) or score < MIN_SCORE_DEG:
         return 0, score, (f"the IMUs tilt by {score:.1f} deg (RMS) at most in any {seconds:g} s of the take: "
                           f"too still to calibrate their headings and mountings from (at least "
@@ -94,12 +92,9 @@ def calibration_window(detections: np.ndarray, times: np.ndarray, readings: ImuR
     return start, score, None
 
 
-def estimate(rig, detections: np.ndarray, times: np.ndarray, layout_name: str, readings: ImuReadings | None,
-             detected: np.ndarray | None = None, **options) -> tuple[Calibration, float | None, str | None]:
-    """window.estimate (with its keyword options) over the window calibration_window chooses
-    (detected: choose_window's), the IMUs left out when they are too still: (calibration,
-    motion score, why they were)."""
-    first, score, why_not = calibration_window(detections, times, readings, options.get("seconds", SECONDS), detected)
-    cal = window_estimate(rig, detections, times, layout_name, None if why_not else readings,
-                          **{"first_frame": first, **options})
+def estimate(rig, data: CalibrationInput, **options) -> tuple[Calibration, float | None, str | None]:
+    """window.estimate (with its keyword options) over the window calibration_window chooses,
+    the IMUs left out when they are too still: (calibration, motion score, why they were)."""
+    first, score, why_not = calibration_window(data, options.get("seconds", SECONDS))
+    cal = window_estimate(rig, data.without_imus() if why_not else data, **{"first_frame": first, **options})
     return cal, score, why_not

@@ -45,6 +45,7 @@ from mocap import _core, paths, rotations
 from mocap.calibration import imu_position
 from mocap.calibration import imus as imu_calibration
 from mocap.calibration import skeleton as skeleton_estimate
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.held_pose import held, held_pose_frames
 from mocap.calibration.readings import ImuReadings
 from mocap.errors import InputError
@@ -144,25 +145,24 @@ def group_indices(skeleton: _core.Skeleton, groups: dict[str, list[str]]) -> lis
     return out
 
 
-def estimate(rig: _core.Rig, detections: np.ndarray, times: np.ndarray, layout_name: str,
-             readings: ImuReadings | None, seconds: float = SECONDS, step: int = STEP,
+def estimate(rig: _core.Rig, data: CalibrationInput, seconds: float = SECONDS, step: int = STEP,
              site_std: float = SITE_OBSERVABLE_STD, use_held_pose: bool = True,
              first_frame: int = 0, quick: bool = False) -> Calibration:
-    """The calibration from detections (F, C, K, 3) at `times` (F,) s and the IMU readings,
-    over the `seconds` from first_frame on; the keypoint sites are estimated (step 4b) along
-    the directions known within site_std (m; 0: the layout's sites kept) when there are IMUs to
-    pin the bones' orientations. quick: one window solve (no accelerometer headings, no sites),
-    about half the time: a first calibration for a live session, while the full one runs."""
+    """The calibration from a take's frames, over the `seconds` from first_frame on; the
+    keypoint sites are estimated (step 4b) along the directions known within site_std (m; 0:
+    the layout's sites kept) when there are IMUs to pin the bones' orientations. quick: one
+    window solve (no accelerometer headings, no sites), about half the time: a first
+    calibration for a live session, while the full one runs."""
     if first_frame:
         f = first_frame
-        c = estimate(rig, detections[f:], times[f:], layout_name, None if readings is None else readings.tail(f),
-                     seconds, step, site_std, use_held_pose, quick=quick)
+        c = estimate(rig, data.tail(f), seconds, step, site_std, use_held_pose, quick=quick)
         c.window_frames = c.window_frames + f
-        c.report["window_start_s"] = float(times[f] - times[0])
+        c.report["window_start_s"] = float(data.times[f] - data.times[0])
         return c
+    detections, times, readings = data.detections, data.times, data.readings
     window = max(int(np.searchsorted(times, times[0] + seconds)), 1)
     w = _Window(rig, detections[:window], times[:window], readings, step)
-    start = _start(w, layout_name)
+    start = _start(w, data.layout)
     pose_name, held_frames = held_pose_frames(start.skeleton, start.thetas, w.times) if use_held_pose else (None, [])
     held_set = set(np.asarray(held_frames).tolist())
     frames, starts, used = _joint_frames(w, len(start.sites), start.thetas, held_set)

@@ -19,6 +19,7 @@ import numpy as np
 
 from mocap import _core, paths
 from mocap.calibration import informative, window
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.readings import readings_at
 from mocap.errors import InputError
 from mocap.io.session import Session, SyncSettings
@@ -60,7 +61,8 @@ def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.
     readings = readings_at(times, [(name, bone, imu_times, streams.imu_quaternions[:, i],
                                     streams.imu_accelerations[:, i])
                                    for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
-    return informative.estimate(rig, keypoints, times, streams.layout, readings, detected=streams.detected)[0]
+    return informative.estimate(rig, CalibrationInput.from_arrays(keypoints, times, streams.layout, readings,
+                                                                 streams.detected))[0]
 
 
 def free_ports(n: int) -> list[int]:

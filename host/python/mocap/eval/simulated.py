@@ -9,6 +9,7 @@ import numpy as np
 
 from mocap import _core
 from mocap.calibration import informative, window
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.readings import ImuReadings
 from mocap.eval import baselines
 from mocap.eval.metrics import calibration_errors, errors, floor_cm
@@ -58,7 +59,8 @@ def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
     det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
     readings = ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions, t.accelerations)
     detected = np.array([kp is not None for kp in t.keypoints])  # HS: the detector runs on 2 of 8 frames
-    return informative.estimate(t.rig, det, t.times, t.layout.name, readings, detected=detected, **options)[0]
+    return informative.estimate(t.rig, CalibrationInput.from_arrays(det, t.times, t.layout.name, readings, detected),
+                                **options)[0]
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),

@@ -20,6 +20,7 @@ import numpy as np
 
 from mocap import _core, paths
 from mocap.calibration import informative, window
+from mocap.calibration.calibration_input import CalibrationInput
 from mocap.calibration.readings import readings_at
 from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
@@ -44,7 +45,8 @@ def solve_take(folder: Path, out: Path) -> dict:
     bones = _core.Skeleton.load(str(paths.DEFAULT_SKELETON)).bone_names
     readings = readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
                                    for m in take.imus]) if take.imus else None
-    cal, score, why_not = informative.estimate(take.rig, det, times, take.layout, readings)
+    cal, score, why_not = informative.estimate(take.rig, CalibrationInput.from_arrays(det, times, take.layout,
+                                                                                      readings))
     if why_not:
         readings = None
     solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
