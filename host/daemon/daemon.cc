@@ -5,6 +5,8 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "wire.h"
+
 namespace mocap {
 namespace {
 

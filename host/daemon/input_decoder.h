@@ -40,6 +40,10 @@ class InputDecoder {
   // mark an invalid orientation or acceleration).
   static ImuInput ToImuInput(const v1::ImuSample& sample, int imu);
 
+  // The session's keypoint layout: its name and keypoints per person.
+  const std::string& layout_name() const { return layout_name_; }
+  int layout_size() const { return layout_size_; }
+
  private:
   std::unordered_map<std::string, int> camera_index_, imu_index_;
   std::string layout_name_;

@@ -110,6 +110,23 @@ bool ReadFields(const json& j, const std::string& prefix, T* options, std::strin
   return true;
 }
 
+// The "sync" key of a SyncOptions field (a time in milliseconds), empty for a field the
+// session does not set.
+std::string SyncKey(const std::string& field) {
+  if (field == "max_pending_frames") return "";
+  const size_t n = field.size();
+  return n > 3 && field.compare(n - 3, 3, "_ns") == 0 ? field.substr(0, n - 3) + "_ms" : field;
+}
+
+// One "sync" number into its field: a time from milliseconds to nanoseconds.
+template <typename Field>
+void ReadSyncValue(const json& value, Field* field) {
+  if constexpr (std::is_same_v<Field, int64_t>)
+    *field = static_cast<int64_t>(value.get<double>() * 1e6);
+  else
+    *field = static_cast<Field>(value.get<double>());
+}
+
 template <typename T>
 json FieldsToJson(const T& options) {
   json j = json::object();
@@ -147,6 +164,41 @@ std::string SolverOptionsToJson(const SolverOptions& options) {
 std::vector<std::string> SolverOptionKeys() {
   std::vector<std::string> keys;
   AddKeys<SolverOptions>("", &keys);
+  return keys;
+}
+
+bool ReadSyncOptions(const json& j, SyncOptions* sync, std::string* error) {
+  if (!j.is_object()) return *error = "sync must be an object", false;
+  for (const auto& [key, value] : j.items()) {
+    bool known = false;
+    SyncOptions::VisitFields([&, key = key](const char* name, auto member) {
+      const std::string k = SyncKey(name);
+      if (known || k.empty() || k != key) return;
+      known = true;
+      if (value.is_number()) ReadSyncValue(value, &(sync->*member));
+    });
+    if (!known) {
+      std::string names;
+      for (const std::string& n : SyncOptionKeys()) names += (names.empty() ? "" : ", ") + n;
+      *error = "unknown sync option '" + key + "' (known: " + names + ")";
+      return false;
+    }
+    if (!value.is_number()) return *error = "sync option '" + key + "' must be a number", false;
+  }
+  return sync->IsValid(error);
+}
+
+bool ParseSyncOptionsJson(const std::string& text, SyncOptions* sync, std::string* error) {
+  const json j = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) return *error = "sync options: invalid JSON", false;
+  return ReadSyncOptions(j, sync, error);
+}
+
+std::vector<std::string> SyncOptionKeys() {
+  std::vector<std::string> keys;
+  SyncOptions::VisitFields([&](const char* name, auto) {
+    if (const std::string k = SyncKey(name); !k.empty()) keys.push_back(k);
+  });
   return keys;
 }
 

@@ -1,9 +1,12 @@
-// SolverOptions as the session file's "solver" object, derived from the fields the struct
-// names (SolverOptions::VisitFields): every field is a key of the same name; a term
-// (TermOptions) is an object of its own fields, e.g. {"position": {"weight": 0.04}}; "loss"
-// is "trivial", "cauchy" or "huber"; "accel_at_rest" is [x, y, z]. Keys left out keep their
+// SolverOptions and SyncOptions as the session file's "solver" and "sync" objects.
+//
+// Both are derived from the fields each struct names (VisitFields). Keys left out keep their
 // defaults. An unknown key or a value of the wrong type is an error naming the key, never
 // ignored: an option misspelt in a session file must not silently fall back to its default.
+//
+// "solver": every field is a key of the same name; a term (TermOptions) is an object of its
+// own fields, e.g. {"position": {"weight": 0.04}}; "loss" is "trivial", "cauchy" or "huber";
+// "accel_at_rest" is [x, y, z].
 #ifndef MOCAP_DAEMON_OPTIONS_JSON_H_
 #define MOCAP_DAEMON_OPTIONS_JSON_H_
 
@@ -12,6 +15,7 @@
 #include <vector>
 
 #include "mocap/solver_options.h"
+#include "mocap/stream_sync.h"
 
 namespace mocap {
 
@@ -26,6 +30,16 @@ std::string SolverOptionsToJson(const SolverOptions& options);
 
 // Every key ReadSolverOptions accepts, a term's fields as "term.field".
 std::vector<std::string> SolverOptionKeys();
+
+// "sync": a time field is a key in milliseconds ("max_wait_ns" is "max_wait_ms"), the rate
+// keeps its name, every value is a number; max_pending_frames, a bound on the host's memory
+// rather than a setting of the studio, is not a key. Reads the keys of j into *sync, then
+// checks the result (SyncOptions::IsValid).
+bool ReadSyncOptions(const nlohmann::json& j, SyncOptions* sync, std::string* error);
+// The same from JSON text.
+bool ParseSyncOptionsJson(const std::string& text, SyncOptions* sync, std::string* error);
+// Every key ReadSyncOptions accepts, in the fields' order.
+std::vector<std::string> SyncOptionKeys();
 
 }  // namespace mocap
 

@@ -1,5 +1,6 @@
-// The session's "solver" object: every field of SolverOptions is read (none is dropped), an
-// unknown key or a value of the wrong type is refused with its name.
+// The session's "solver" and "sync" objects: every field of SolverOptions (of SyncOptions, but
+// the memory bound) is read (none is dropped), an unknown key or a value of the wrong type is
+// refused with its name.
 #include "options_json.h"
 
 #include <gtest/gtest.h>
@@ -97,6 +98,45 @@ TEST(OptionsJson, TheKeysAreTheFieldsWithTermsAsTermDotField) {
                     ? written.contains(key)
                     : written.at(key.substr(0, dot)).contains(key.substr(dot + 1)))
         << key;
+  }
+}
+
+// Every sync key sets its field (times given in ms), and only that field.
+TEST(OptionsJson, EverySyncKeySetsItsField) {
+  const std::vector<std::string> keys = SyncOptionKeys();
+  ASSERT_EQ(keys.size(), 7u);  // every field but max_pending_frames
+  for (const std::string& key : keys) {
+    SyncOptions o;
+    std::string error;
+    ASSERT_TRUE(ReadSyncOptions(json{{key, 500}}, &o, &error)) << key << ": " << error;
+    int changed = 0;
+    SyncOptions::VisitFields([&](const char* name, auto member) {
+      if (o.*member == SyncOptions().*member) return;
+      changed++;
+      const bool time = key.size() > 3 && key.compare(key.size() - 3, 3, "_ms") == 0;
+      EXPECT_EQ(static_cast<double>(o.*member), time ? 5e8 : 500.0) << name;
+    });
+    EXPECT_EQ(changed, 1) << key;
+  }
+}
+
+TEST(OptionsJson, AnUnknownSyncKeyOrAWrongValueIsRefusedByName) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"max_wait": 30})", "unknown sync option 'max_wait'"},
+      {R"({"max_wait_ns": 30})", "unknown sync option 'max_wait_ns'"},
+      {R"({"max_pending_frames": 30})", "unknown sync option 'max_pending_frames'"},
+      {R"({"": 30})", "unknown sync option ''"},
+      {R"({"max_wait_ms": "30"})", "sync option 'max_wait_ms' must be a number"},
+      {R"({"max_wait_ms": true})", "sync option 'max_wait_ms' must be a number"},
+      {R"({"imu_max_gap_ms": -1})", "sync options out of range"},
+      {R"([1])", "sync must be an object"},
+      {R"({"max_wait_ms": )", "invalid JSON"},
+  };
+  for (const auto& [text, message] : cases) {
+    SyncOptions o;
+    std::string error;
+    EXPECT_FALSE(ParseSyncOptionsJson(text, &o, &error)) << text;
+    EXPECT_NE(error.find(message), std::string::npos) << text << ": " << error;
   }
 }
 

@@ -4,10 +4,9 @@
 // (daemon.h) feeds it from ZeroMQ; an offline solve feeds it a recording. Every bad input is
 // counted and dropped.
 //
-// Its parts, each in its own file: InputDecoder (wire message -> synchroniser input),
-// ChooseSubject (subject_selector.h), StreamSynchroniser (stream_sync.h), CalibrationQueue,
-// SolveStep (the solver with the IMUs it may use), EncodePoseFrame, StreamMonitor (drops,
-// stream statistics, Health).
+// Its parts, each in its own file: InputPath (wire message -> synchronised frame: decoding,
+// subject choice, synchronisation, drops and stream statistics), CalibrationQueue, SolveStep
+// (the solver with the IMUs it may use), EncodePoseFrame, StreamMonitor (Health).
 #ifndef MOCAP_DAEMON_PIPELINE_H_
 #define MOCAP_DAEMON_PIPELINE_H_
 
@@ -18,14 +17,12 @@
 #include <vector>
 
 #include "calibration_queue.h"
-#include "input_decoder.h"
-#include "mocap/stream_sync.h"
+#include "input_path.h"
+#include "mocap/v1/calibration.pb.h"
 #include "mocap/v1/health.pb.h"
 #include "mocap/v1/pose_frame.pb.h"
 #include "session.h"
 #include "solve_step.h"
-#include "stream_monitor.h"
-#include "wire.h"
 
 namespace mocap {
 
@@ -44,12 +41,12 @@ class HostPipeline {
             std::string* why = nullptr);
   // Counts a message the transport could not even split into (type, payload).
   bool Reject(const std::string& reason, const std::string& detail, std::string* why) {
-    return monitor_.Drop(reason, detail, why);
+    return input_.monitor().Drop(reason, detail, why);
   }
   // Solves the frames ready at now_ns, oldest first.
   std::vector<SolvedFrame> Solve(int64_t now_ns);
   // The publisher reports each frame's latency (publication - last input), milliseconds.
-  void RecordLatency(double ms) { monitor_.RecordLatency(ms); }
+  void RecordLatency(double ms) { input_.monitor().RecordLatency(ms); }
   // Health over the period since the previous call (which it starts anew).
   v1::Health Health(int64_t now_ns);
 
@@ -58,23 +55,19 @@ class HostPipeline {
   uint64_t calibrations_applied() const { return calibrations_.counts().applied; }
   // Per IMU of the session: solved with (its mounting and heading known).
   const std::vector<bool>& imus_calibrated() const { return step_.imus_calibrated(); }
-  const std::map<std::string, uint64_t>& dropped() const { return monitor_.dropped(); }
+  const std::map<std::string, uint64_t>& dropped() const { return input_.monitor().dropped(); }
   uint64_t frames_solved() const { return frames_solved_; }
 
  private:
   HostPipeline(Session session, std::unique_ptr<Solver> solver);
-  bool FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, std::string* why);
-  bool FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why);
   bool FeedCalibration(const v1::Calibration& calibration, int64_t now_ns, std::string* why);
   // Applies the queued calibrations valid at or before time_ns.
   void ApplyCalibrations(int64_t time_ns);
 
   Session session_;
   SolveStep step_;
-  InputDecoder decoder_;
+  InputPath input_;
   CalibrationQueue calibrations_;
-  StreamSynchroniser sync_;
-  StreamMonitor monitor_;
   uint64_t frames_solved_ = 0;
 };
 

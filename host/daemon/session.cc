@@ -12,42 +12,10 @@ namespace {
 
 using nlohmann::json;
 
-std::string Join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-// The sync object's keys: the synchroniser's times in milliseconds, its IMU-only rate in Hz.
-constexpr std::pair<const char*, int64_t SyncOptions::*> kSyncMs[] = {
-    {"group_tolerance_ms", &SyncOptions::group_tolerance_ns},
-    {"max_wait_ms", &SyncOptions::max_wait_ns},
-    {"stale_after_ms", &SyncOptions::stale_after_ns},
-    {"imu_max_gap_ms", &SyncOptions::imu_max_gap_ns},
-    {"imu_max_hold_ms", &SyncOptions::imu_max_hold_ns},
-    {"imu_history_ms", &SyncOptions::imu_history_ns}};
-constexpr const char* kSyncRate = "imu_only_rate_hz";
-
 // The keys of the session object itself.
 constexpr const char* kSessionKeys[] = {"format",         "skeleton", "rig",    "layout", "imus",
                                         "prior",          "inputs",   "output", "sync",   "solver",
                                         "imus_calibrated"};
-
-bool ReadSync(const json& j, SyncOptions* sync, std::string* error) {
-  if (!j.is_object()) return *error = "sync must be an object", false;
-  for (const auto& [key, value] : j.items()) {
-    double* rate = key == kSyncRate ? &sync->imu_only_rate_hz : nullptr;
-    int64_t SyncOptions::*ns = nullptr;
-    for (const auto& [name, member] : kSyncMs) ns = key == name ? member : ns;
-    if (!rate && !ns)
-      return *error = "unknown sync option '" + key + "' (known: " + Join(SyncOptionKeys()) + ")",
-             false;
-    if (!value.is_number()) return *error = "sync option '" + key + "' must be a number", false;
-    if (rate) *rate = value.get<double>();
-    if (ns) sync->*ns = static_cast<int64_t>(value.get<double>() * 1e6);
-  }
-  return sync->IsValid(error);
-}
 
 bool CheckSessionKeys(const json& j, std::string* error) {
   if (!j.is_object()) return *error = "a session is a JSON object", false;
@@ -59,13 +27,6 @@ bool CheckSessionKeys(const json& j, std::string* error) {
 }
 
 }  // namespace
-
-std::vector<std::string> SyncOptionKeys() {
-  std::vector<std::string> keys;
-  for (const auto& [name, member] : kSyncMs) keys.push_back(name);
-  keys.push_back(kSyncRate);
-  return keys;
-}
 
 bool LoadSession(const std::string& path, Session* out, std::string* error) {
   std::string text;
@@ -98,7 +59,7 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
     s.inputs = j.at("inputs").get<std::vector<std::string>>();
     s.output = j.at("output").get<std::string>();
     if (s.inputs.empty()) throw std::runtime_error("no inputs");
-    if (j.contains("sync") && !ReadSync(j.at("sync"), &s.sync, error))
+    if (j.contains("sync") && !ReadSyncOptions(j.at("sync"), &s.sync, error))
       throw std::runtime_error(*error);
     if (j.contains("solver") && !ReadSolverOptions(j.at("solver"), &s.solver, error))
       throw std::runtime_error(*error);

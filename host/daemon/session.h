@@ -10,11 +10,12 @@
 //               "position": {"weight": 0.04, "loss": "cauchy"}, ...},
 //    "imus_calibrated": true}
 // Paths are relative to the session file. "solver" takes every field of SolverOptions by its
-// name (options_json.h: SolverOptionKeys). "imus_calibrated": false (default true) says the
-// IMU set's mountings and headings are not known yet: the IMUs are synchronised but not
-// solved with until a Calibration message (proto/mocap/v1/calibration.proto) brings them.
-// Camera ids on the wire are the rig's camera names, sensor ids the IMU set's names. Missing
-// "sync" / "solver" keys keep the defaults; an unknown key anywhere is an error naming it.
+// name, "sync" every field of SyncOptions but max_pending_frames, times in milliseconds
+// (options_json.h: SolverOptionKeys, SyncOptionKeys). "imus_calibrated": false (default true) says
+// the IMU set's mountings and headings are not known yet: the IMUs are synchronised but not solved
+// with until a Calibration message (proto/mocap/v1/calibration.proto) brings them. Camera ids on
+// the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
+// keys keep the defaults; an unknown key anywhere is an error naming it.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -41,9 +42,6 @@ struct Session {
 };
 
 bool LoadSession(const std::string& path, Session* out, std::string* error);
-
-// The keys the session's "sync" object accepts.
-std::vector<std::string> SyncOptionKeys();
 
 }  // namespace mocap
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "options_json.h"
 #include "synthetic_scene.h"
 
 namespace mocap {

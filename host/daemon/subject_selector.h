@@ -1,6 +1,7 @@
-// Which of the persons a camera box detected is the subject. While the solver tracks, the
-// person nearest the projection of the tracked pose (a bystander walking through is not
-// taken for the subject); before, or with one person, the most confident.
+// Which of the persons a camera box detected is the subject, each camera remembering its
+// previous choice. While a tracker (the solver) follows the subject, the person nearest the
+// tracked pose's projection; before, the person nearest the camera's previous choice, so a
+// bystander walking past is not taken for the subject; with neither, the largest person.
 #ifndef MOCAP_DAEMON_SUBJECT_SELECTOR_H_
 #define MOCAP_DAEMON_SUBJECT_SELECTOR_H_
 
@@ -16,15 +17,34 @@ namespace mocap {
 // site does not project (behind the camera).
 std::vector<Eigen::Vector2d> ProjectSites(const Solver& solver, const Camera& camera);
 
-// The index of the person whose keypoints above min_confidence lie nearest `predicted`
-// (median pixel distance over the keypoints with a finite prediction); with `predicted`
-// empty, the person with the largest sum of confidences. 0 for a frame without persons.
-int ChooseSubject(const v1::KeypointFrame& frame, const std::vector<Eigen::Vector2d>& predicted,
-                  double min_confidence);
+class SubjectSelector {
+ public:
+  // Keypoints at or below min_confidence are not detected: they neither size nor place a
+  // person.
+  SubjectSelector(int num_cameras, double min_confidence);
 
-// The subject of a frame of `camera`: nearest the solver's pose once it is initialised and
-// the frame has several persons, else the most confident.
-int ChooseSubject(const v1::KeypointFrame& frame, const Camera& camera, const Solver& solver);
+  // The index of the subject among frame.persons() of `camera`, -1 for none. Among several
+  // persons, in order:
+  //  - nearest `predicted` (may be null: no tracker), the tracked pose's keypoint sites
+  //    projected in this camera (NaN: not projected);
+  //  - else nearest this camera's previous choice;
+  //  - else the largest: the larger side of the box of its keypoints; boxes within 1% are
+  //    one size, and then the most confident (sum of confidences) is taken.
+  // Nearest: the median pixel distance over the keypoints placed in both; a rule that can
+  // compare no person passes on to the next. A detected frame with nobody forgets the
+  // camera's previous choice; a frame not detected (HS mode) keeps it.
+  int Choose(const v1::KeypointFrame& frame, int camera,
+             const std::vector<Eigen::Vector2d>* predicted);
+
+ private:
+  // The person's confident keypoints as pixels, NaN for the others.
+  std::vector<Eigen::Vector2d> Placed(const v1::KeypointPerson& person) const;
+  int Nearest(const v1::KeypointFrame& frame, const std::vector<Eigen::Vector2d>& to) const;
+  int Largest(const v1::KeypointFrame& frame) const;
+
+  double min_confidence_;
+  std::vector<std::vector<Eigen::Vector2d>> previous_;  // per camera; empty: none
+};
 
 }  // namespace mocap
 

@@ -66,4 +66,5 @@ PYBIND11_MODULE(_core, m) {
   BindSolver(m);
   BindCalibration(m);
   BindPipeline(m);
+  BindInput(m);
 }

@@ -35,10 +35,11 @@ FrameObservations MakeFrame(double timestamp, const std::vector<int>& cameras, A
 void BindGeometry(py::module_& m);     // SO(3), Skeleton, fit_to_points
 void BindSites(py::module_& m);        // KeypointLayout, ImuSite and their files
 void BindCamera(py::module_& m);       // Camera, Rig
-void BindOptions(py::module_& m);      // LossType, TermOptions, SolverOptions, CalibrationOptions
+void BindOptions(py::module_& m);      // LossType, Term-, Solver-, Sync-, CalibrationOptions
 void BindSolver(py::module_& m);       // PosePrior, SolveResult, Solver
 void BindCalibration(py::module_& m);  // CalibrationResult, calibrate_window
-void BindPipeline(py::module_& m);     // HostPipeline, the session's keys
+void BindPipeline(py::module_& m);     // HostPipeline
+void BindInput(py::module_& m);        // InputPath, SyncedFrame
 
 }  // namespace mocap::bindings
 

@@ -6,9 +6,9 @@
 
 #include "bindings.h"
 #include "mocap/solver_options.h"
+#include "mocap/stream_sync.h"
 #include "mocap/window_calibration.h"
 #include "options_json.h"
-#include "session.h"
 
 namespace mocap::bindings {
 namespace {
@@ -56,6 +56,20 @@ void BindSolverOptions(py::module_& m) {
           "unknown key, a value of the wrong type or a field out of range).");
   m.def("session_solver_keys", &SolverOptionKeys,
         "Every key the session reader accepts in \"solver\" (a term's fields as term.field).");
+}
+
+void BindSyncOptions(py::module_& m) {
+  BindFields<SyncOptions>(m, "SyncOptions")
+      .def("check", &Check<SyncOptions>, "Raises ValueError when a field is out of range.")
+      .def_static(
+          "from_session_json",
+          [](const std::string& text) {
+            return Checked<SyncOptions>(
+                [&](SyncOptions* o, std::string* e) { return ParseSyncOptionsJson(text, o, e); });
+          },
+          py::arg("text"),
+          "Options from a session's \"sync\" object (times in ms), as mocapd reads it "
+          "(ValueError naming an unknown key or a value that is not a number, or out of range).");
   m.def("session_sync_keys", &SyncOptionKeys, "Every key the session reader accepts in \"sync\".");
 }
 
@@ -63,6 +77,7 @@ void BindSolverOptions(py::module_& m) {
 
 void BindOptions(py::module_& m) {
   BindSolverOptions(m);
+  BindSyncOptions(m);
   BindFields<HeldPose>(m, "HeldPose");
   BindFields<CalibrationOptions>(m, "CalibrationOptions")
       .def("check", &Check<CalibrationOptions>,

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "mocap/solver_options.h"
+#include "mocap/stream_sync.h"
 #include "mocap/window_calibration.h"
 
 namespace mocap {
@@ -45,6 +46,7 @@ TEST(Options, VisitFieldsNamesEveryMember) {
   EXPECT_EQ(CountVisited<SolverOptions>(), CountMembers<SolverOptions>());
   EXPECT_EQ(CountVisited<HeldPose>(), CountMembers<HeldPose>());
   EXPECT_EQ(CountVisited<CalibrationOptions>(), CountMembers<CalibrationOptions>());
+  EXPECT_EQ(CountVisited<SyncOptions>(), CountMembers<SyncOptions>());
   // The counting itself: a struct of three members counts three.
   struct Three {
     int a = 0;

@@ -116,13 +116,30 @@ void StreamSynchroniser::ClockFromImus(int64_t now_ns) {
 
 std::vector<SyncedFrame> StreamSynchroniser::TakeReady(int64_t now_ns) {
   ClockFromImus(now_ns);
+  return TakePending(now_ns, /*all=*/false);
+}
+
+std::vector<SyncedFrame> StreamSynchroniser::Flush() {
+  std::optional<int64_t> newest;
+  const auto later = [&](const StreamCounts& c) {
+    if (c.last_arrival_ns) newest = std::max(newest.value_or(INT64_MIN), *c.last_arrival_ns);
+  };
+  for (const CameraStream& c : cameras_) later(c.counts);
+  for (const ImuStream& i : imus_) later(i.counts);
+  if (!newest) return {};
+  const int64_t now_ns = *newest + options_.max_wait_ns;
+  ClockFromImus(now_ns);
+  return TakePending(now_ns, /*all=*/true);
+}
+
+std::vector<SyncedFrame> StreamSynchroniser::TakePending(int64_t now_ns, bool all) {
   std::vector<SyncedFrame> ready;
   while (!pending_.empty()) {
     const Group& front = pending_.front();
     const bool overflow = static_cast<int>(pending_.size()) > options_.max_pending_frames;
     const bool deadline = now_ns >= front.time_ns + options_.max_wait_ns;
     const bool complete = Complete(front, now_ns);
-    if (!complete && !deadline && !overflow) break;
+    if (!complete && !deadline && !overflow && !all) break;
     if (!complete) frames_forced_++;
     Group group = std::move(pending_.front());
     pending_.pop_front();
@@ -144,6 +161,7 @@ SyncedFrame StreamSynchroniser::Release(Group group, int64_t now_ns) {
     if (!group.cameras[c]) continue;
     out.cameras_clocked.push_back(static_cast<int>(c));
     CameraInput& in = *group.cameras[c];
+    if (in.detected) out.cameras_detected.push_back(static_cast<int>(c));
     if (in.detected && !in.keypoints.empty()) {
       out.observations.cameras.push_back(CameraObservation{in.camera, std::move(in.keypoints)});
     }

@@ -137,6 +137,7 @@ TEST(StreamSync, FramesWithoutDetectionClockTheSolveWithoutKeypoints) {
   ASSERT_EQ(ready.size(), 1u);
   EXPECT_TRUE(ready[0].observations.cameras.empty());
   EXPECT_EQ(ready[0].cameras_clocked, std::vector<int>{0});
+  EXPECT_TRUE(ready[0].cameras_detected.empty());
   EXPECT_EQ(ready[0].observations.imus.size(), 1u);
 }
 
@@ -167,6 +168,24 @@ TEST(StreamSync, WithoutCamerasTheImusClockTheFrames) {
   for (size_t k = 1; k < frames.size(); ++k)
     EXPECT_EQ(frames[k].time_ns - frames[k - 1].time_ns, 20 * kMs);
   for (const auto& f : frames) EXPECT_EQ(f.observations.imus.size(), 1u);
+}
+
+TEST(StreamSync, AFlushHandsOverEveryPendingFrame) {
+  StreamSynchroniser sync(2, 0, SyncOptions{});
+  EXPECT_TRUE(sync.Flush().empty());
+  // Camera 1 is expected but silent; camera 0's clock runs 100 ms ahead of the arrival clock,
+  // so even max_wait after the last arrival its frames are not due.
+  const int64_t arrival = kT0 - 100 * kMs;
+  sync.AddCamera(Cam(0, kT0), arrival);
+  sync.AddCamera(Cam(0, kT0 + kFrame), arrival);
+  EXPECT_TRUE(sync.TakeReady(arrival + SyncOptions().max_wait_ns).empty());
+  const std::vector<SyncedFrame> rest = sync.Flush();
+  ASSERT_EQ(rest.size(), 2u);
+  EXPECT_EQ(rest[0].time_ns, kT0);
+  EXPECT_EQ(rest[1].time_ns, kT0 + kFrame);
+  EXPECT_EQ(rest[1].released_ns, arrival + SyncOptions().max_wait_ns);
+  EXPECT_EQ(sync.frames_forced(), 2u);
+  EXPECT_EQ(sync.pending(), 0);
 }
 
 TEST(StreamSync, AnOverfullQueueHandsOverItsOldestFrame) {

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "mocap/observations.h"
@@ -37,6 +38,20 @@ struct SyncOptions {
   double imu_only_rate_hz = 60.0;          // frame clock when no camera is active
   int max_pending_frames = 120;            // beyond this the oldest frame is handed over
   bool IsValid(std::string* error) const;
+
+  // Every field once (as SolverOptions::VisitFields): the bindings' attributes and the
+  // session's "sync" keys (daemon/options_json.h) are derived from it.
+  template <typename Visit>
+  static void VisitFields(Visit&& visit) {
+    visit("group_tolerance_ns", &SyncOptions::group_tolerance_ns);
+    visit("max_wait_ns", &SyncOptions::max_wait_ns);
+    visit("stale_after_ns", &SyncOptions::stale_after_ns);
+    visit("imu_max_gap_ns", &SyncOptions::imu_max_gap_ns);
+    visit("imu_max_hold_ns", &SyncOptions::imu_max_hold_ns);
+    visit("imu_history_ns", &SyncOptions::imu_history_ns);
+    visit("imu_only_rate_hz", &SyncOptions::imu_only_rate_hz);
+    visit("max_pending_frames", &SyncOptions::max_pending_frames);
+  }
 };
 
 struct CameraInput {
@@ -61,6 +76,7 @@ struct SyncedFrame {
   int64_t last_input_ns = 0;         // arrival of the newest input the frame used
   int64_t released_ns = 0;           // `now` when it was handed over
   std::vector<int> cameras_clocked;  // cameras that delivered the frame (with or without keypoints)
+  std::vector<int> cameras_detected;  // of those, the ones that ran detection (not HS-only frames)
 };
 
 struct StreamCounts {
@@ -78,7 +94,13 @@ class StreamSynchroniser {
   bool AddImu(const ImuInput& input, int64_t now_ns);
   // Frames ready at now_ns, oldest first.
   std::vector<SyncedFrame> TakeReady(int64_t now_ns);
+  // The end of the input (an offline solve): the frames ready max_wait after the newest
+  // arrival, as the live host would release them had nothing more come, then every frame
+  // still pending. Empty before any input.
+  std::vector<SyncedFrame> Flush();
 
+  int num_cameras() const { return static_cast<int>(cameras_.size()); }
+  int num_imus() const { return static_cast<int>(imus_.size()); }
   bool CameraActive(int c, int64_t now_ns) const { return Active(cameras_[c].counts, now_ns); }
   bool ImuActive(int i, int64_t now_ns) const { return Active(imus_[i].counts, now_ns); }
   const StreamCounts& camera_counts(int c) const { return cameras_[c].counts; }
@@ -111,6 +133,9 @@ class StreamSynchroniser {
   bool Active(const StreamCounts& counts, int64_t now_ns) const;
   bool Complete(const Group& group, int64_t now_ns) const;
   void ClockFromImus(int64_t now_ns);
+  // Hands over the pending frames, oldest first, while each is complete, due or beyond the
+  // queue's bound; all: every one.
+  std::vector<SyncedFrame> TakePending(int64_t now_ns, bool all);
   SyncedFrame Release(Group group, int64_t now_ns);
   // The IMU's reading at t_ns (slerp / lerp), with the newest arrival of what it used.
   std::optional<std::pair<ImuObservation, int64_t>> Interpolate(int i, int64_t t_ns) const;

@@ -1,0 +1,85 @@
+#include "input_path.h"
+
+#include "wire.h"
+
+namespace mocap {
+namespace {
+
+template <typename T>
+std::vector<std::string> Names(const std::vector<T>& items) {
+  std::vector<std::string> names;
+  for (const T& item : items) names.push_back(item.name);
+  return names;
+}
+
+}  // namespace
+
+InputPath::InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const KeypointLayout& layout,
+                     const SyncOptions& sync, double min_confidence)
+    : rig_(rig),
+      decoder_(rig, imus, layout),
+      selector_(static_cast<int>(rig.cameras.size()), min_confidence),
+      sync_(static_cast<int>(rig.cameras.size()), static_cast<int>(imus.size()), sync),
+      monitor_(Names(rig.cameras), Names(imus)) {}
+
+bool InputPath::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
+                     const Solver* tracker, std::string* why) {
+  const wire::Decoded d = wire::DecodeMessage(type, payload);
+  if (!d.message) return monitor_.Drop(wire::ToString(d.reason), d.detail, why);
+  return Feed(*d.message, now_ns, tracker, why);
+}
+
+bool InputPath::Feed(const google::protobuf::Message& message, int64_t now_ns,
+                     const Solver* tracker, std::string* why) {
+  if (auto* frame = dynamic_cast<const v1::KeypointFrame*>(&message))
+    return FeedKeypoints(*frame, now_ns, tracker, why);
+  if (auto* batch = dynamic_cast<const v1::ImuBatch*>(&message))
+    return FeedImus(*batch, now_ns, why);
+  return monitor_.Drop("not_an_input", wire::TypeName(message) + " is not an input of the host",
+                       why);
+}
+
+bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, const Solver* tracker,
+                              std::string* why) {
+  int c = -1;
+  Rejection rejection;
+  if (!decoder_.CameraOf(frame, &c, &rejection)) {
+    if (c >= 0) monitor_.camera(c).invalid++;
+    return monitor_.Drop(rejection.reason, rejection.detail, why);
+  }
+  monitor_.camera(c).Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
+  // Projecting the tracked pose is needed only to tell several persons apart.
+  const bool track =
+      tracker && tracker->initialised() && frame.detected() && frame.persons_size() > 1;
+  const std::vector<Eigen::Vector2d> predicted =
+      track ? ProjectSites(*tracker, rig_.cameras[c]) : std::vector<Eigen::Vector2d>();
+  const int subject = selector_.Choose(frame, c, track ? &predicted : nullptr);
+  if (!sync_.AddCamera(decoder_.ToCameraInput(frame, c, subject), now_ns)) {
+    return monitor_.Drop("late_or_duplicate",
+                         frame.camera_id() + " frame " + std::to_string(frame.frame_index()), why);
+  }
+  return true;
+}
+
+bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why) {
+  monitor_.hub(batch.hub_id()).Count(batch.sequence(), 0, batch.send_time_ns(), now_ns);
+  int unknown = 0;
+  for (const v1::ImuSample& s : batch.samples()) {
+    const int i = decoder_.ImuOf(s.sensor_id());
+    if (i < 0) {
+      unknown++;
+      continue;
+    }
+    monitor_.imu(i).Count(s.packet_counter(), 1u << 16, s.sample_time_ns(), now_ns);
+    if (!sync_.AddImu(InputDecoder::ToImuInput(s, i), now_ns))
+      monitor_.CountDropped("late_or_duplicate");
+  }
+  if (unknown == 0) return true;
+  monitor_.CountDropped("unknown_source", unknown - 1);
+  return monitor_.Drop("unknown_source",
+                       std::to_string(unknown) + " samples of sensors not in the IMU set (hub " +
+                           batch.hub_id() + ")",
+                       why);
+}
+
+}  // namespace mocap
