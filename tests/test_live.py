@@ -215,7 +215,7 @@ def test_without_imu_messages_the_calibration_is_the_skeleton_from_video(oracle_
     that is late): the skeleton and keypoint sites, and no IMU site — mocapd then keeps
     solving from video alone."""
     studio, _, take = oracle_take
-    cameras_only = [(m.type_name, m.payload) for m in reader.read(take) if m.topic.startswith("/camera/")]
+    cameras_only = [(m.log_time_ns, m.type_name, m.payload) for m in reader.read(take) if m.topic.startswith("/camera/")]
     estimated = from_messages.estimate(cameras_only, studio.session, 5.0, "cameras only")
     assert json.loads(estimated.imus_json)["imus"] == [] and len(estimated.report["imus_missing"]) == 13
     assert estimated.report["window_motion_score_deg"] is None

@@ -51,3 +51,26 @@ class CalibrationInput:
         """Aligned arrays (detected: default every frame)."""
         detected = np.ones(len(times), bool) if detected is None else np.asarray(detected, bool)
         return cls(np.asarray(detections, float), np.asarray(times, float), layout, readings, detected)
+
+    @classmethod
+    def from_frames(cls, frames: list, cameras: int, layout: str, keypoints: int,
+                    imu_set: list[tuple[str, int]]) -> CalibrationInput | None:
+        """The input of synchronised frames (_core.SyncedFrame, mocap.model.frames) of a rig of
+        `cameras`, a layout of `keypoints`, an IMU set of (name, bone) in the InputPath's
+        order; a sensor with fewer than two readings is left out (the calibration cannot place
+        it). None for no frame."""
+        if not frames:
+            return None
+        n = len(frames)
+        det = np.zeros((n, cameras, keypoints, 3))
+        quats, accs = np.full((n, len(imu_set), 4), np.nan), np.full((n, len(imu_set), 3), np.nan)
+        for f, frame in enumerate(frames):
+            det[f, frame.cameras] = frame.keypoints
+            quats[f, frame.imus] = frame.quaternions_wxyz  # NaN where the synchroniser has no reading
+            accs[f, frame.imus] = frame.accelerations
+        times_ns = np.array([frame.time_ns for frame in frames], dtype=np.int64)
+        detected = np.array([len(frame.cameras_detected) > 0 for frame in frames])
+        kept = [i for i in range(len(imu_set)) if np.isfinite(quats[:, i]).all(axis=1).sum() >= 2]
+        readings = None if not kept else ImuReadings([imu_set[i][0] for i in kept], [imu_set[i][1] for i in kept],
+                                                     quats[:, kept], accs[:, kept])
+        return cls(det, (times_ns - times_ns[0]) * 1e-9, layout, readings, detected, int(times_ns[0]))

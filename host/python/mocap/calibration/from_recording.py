@@ -63,16 +63,23 @@ def record_window(endpoints: list[str], path: Path, session: Path, seconds: floa
     return counts
 
 
-def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS) -> dict:
+def calibrate(recording_path: Path, out: Path, session: Path | None = None, seconds: float = window.SECONDS,
+              span_ns: tuple[int, int] | None = None) -> dict:
+    """Calibrates `session` (default: the one attached to the recording) from the recording's
+    camera and IMU messages, at their recorded arrival times (span_ns: only those that arrived
+    in [first, last], e.g. a live calibration's span, to repeat it), and writes the calibrated
+    session into `out`; the report."""
     recording_path, out = Path(recording_path), Path(out)
+    first, last = span_ns if span_ns is not None else (-(2 ** 63), 2 ** 63 - 1)
     with tempfile.TemporaryDirectory() as attached:
         if session is None:
             session = reader.read_session(recording_path, attached)
             if session is None:
                 raise InputError(f"{recording_path}: no session is attached; give one with --session")
         session = Path(session).resolve()
-        estimated = estimate(((m.type_name, m.payload) for m in reader.read(recording_path)), session, seconds,
-                             str(recording_path))
+        messages = ((m.log_time_ns, m.type_name, m.payload) for m in reader.read(recording_path)
+                    if first <= m.log_time_ns <= last)
+        estimated = estimate(messages, session, seconds, str(recording_path))
         report = {"recording": str(recording_path), "session": str(session), **estimated.report}
         write_session(out, session, estimated, report)
     return report

@@ -91,11 +91,12 @@ class Buffer:
         while self.items and self.items[0][0] < arrival_ns - self.keep_ns:
             self.items.popleft()
 
-    def snapshot(self) -> list[tuple[str, bytes]]:
-        return [(t, p) for _, t, p in self.items]
+    def snapshot(self) -> list[tuple[int, str, bytes]]:
+        """(arrival ns, type name, payload) of each message kept, in arrival order."""
+        return list(self.items)
 
 
-def _estimate(messages: list[tuple[str, bytes]], session: str, seconds: float, quick: bool) -> Estimated:
+def _estimate(messages: list[tuple[int, str, bytes]], session: str, seconds: float, quick: bool) -> Estimated:
     """In the worker process."""
     return estimate(messages, Path(session), seconds, "the live streams", quick=quick)
 
@@ -152,15 +153,17 @@ class LiveCalibrator:
     published (see the module docstring)."""
 
     def __init__(self, session: Path, out: Path, seconds: float, policy: Policy, source: str,
-                 clock=time.monotonic):
+                 clock=time.monotonic, clock_ns=time.time_ns):
+        """clock: s, for the policy's intervals; clock_ns: the arrival clock the messages are
+        stamped with (the host's, as mocapd's)."""
         self.session, self.out, self.seconds, self.policy, self.source = session, out, seconds, policy, source
-        self.clock = clock
+        self.clock, self.clock_ns = clock, clock_ns
         self.buffer, self.motion = Buffer(seconds + MARGIN_S), MotionWatch(seconds)
         self.published: list[dict] = []
         self.latest: wire.Calibration | None = None
         self.job: concurrent.futures.Future | None = None
         self.job_score, self.in_use = float("nan"), None
-        self.full_of: list[tuple[str, bytes]] | None = None  # after a quick one: these, in full
+        self.full_of: list[tuple[int, str, bytes]] | None = None  # after a quick one: these, in full
         self.first = self.last_check = self.last_start = self.last_sent = None
 
     def hear(self, frames: list[bytes]) -> None:
@@ -169,7 +172,7 @@ class LiveCalibrator:
         except wire.WireError:
             return  # mocapd counts what is malformed; the calibrator only skips it
         if isinstance(msg, (wire.KeypointFrame, wire.ImuBatch)):
-            self.buffer.add(time.time_ns(), msg.DESCRIPTOR.full_name, bytes(frames[1]))
+            self.buffer.add(self.clock_ns(), msg.DESCRIPTOR.full_name, bytes(frames[1]))
             self.first = self.first or self.clock()
         if isinstance(msg, wire.ImuBatch):
             self.motion.add(msg)
@@ -201,7 +204,7 @@ class LiveCalibrator:
             log.warning("calibration failed: %s", e)
             self.full_of = None
             return
-        valid_from = time.time_ns()
+        valid_from = self.clock_ns()
         self.latest = message(self.source, len(self.published), estimated, valid_from)
         self.in_use = self.job_score
         record = {"sequence": self.latest.sequence, "valid_from_ns": valid_from,

@@ -22,6 +22,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "(default: the one attached to the recording)")
     ca.add_argument("--out", required=True, help="folder for the calibrated session (session.json and its files)")
     ca.add_argument("--seconds", type=float, default=5.0, help="length of the calibration window (default 5)")
+    ca.add_argument("--span", nargs=2, type=int, metavar=("FIRST_NS", "LAST_NS"),
+                    help="--recording: only the messages that arrived in this span (a live calibration's "
+                         "span_ns, from calibration.json, repeats it)")
     ca.add_argument("--max-seconds", type=float, default=30.0,
                     help="--connect: stop recording after this long even if the IMUs barely moved (default 30); "
                          "--follow: calibrate after this long from seconds that move less")
@@ -57,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         from_recording.record_window(args.connect, recorded, Path(args.session), args.seconds,
                                      max_seconds=args.max_seconds)
     report = from_recording.calibrate(recorded, Path(args.out), Path(args.session) if args.session else None,
-                                      args.seconds)
+                                      args.seconds, tuple(args.span) if args.span else None)
     print(json.dumps({"session": str(Path(args.out) / "session.json"), "frames": report["frames"],
                       "imus_calibrated": len(report["imus_calibrated"]), "imus_missing": report["imus_missing"]}),
           flush=True)

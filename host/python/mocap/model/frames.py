@@ -1,0 +1,40 @@
+"""The studio's messages turned into the frames mocapd would solve, by mocapd's own input
+path (C++ InputPath through the bindings: each message checked and mapped to the session's
+cameras and IMUs, the subject chosen per camera, camera frames grouped by capture time and
+the IMUs interpolated to the frame times, late input dropped by its arrival time). The
+calibration (from a recording or from the live calibrator's last seconds) reads these
+frames, so it calibrates on what the live host solves with.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+from mocap import _core
+from mocap.errors import InputError
+
+INPUT_TYPES = ("mocap.v1.KeypointFrame", "mocap.v1.ImuBatch")
+
+
+def input_path(session: Path) -> _core.InputPath:
+    """A fresh InputPath for `session` (its rig, layout, IMU set, "sync" settings and the
+    solver's min_confidence, read as mocapd reads them); InputError when mocapd would refuse it."""
+    try:
+        return _core.InputPath.from_session(str(session))
+    except ValueError as e:
+        raise InputError(str(e)) from None
+
+
+def synchronise(path: _core.InputPath, messages: Iterable[tuple[int, str, bytes]]) -> list:
+    """The synchronised frames (_core.SyncedFrame, oldest first) of (arrival ns, type name,
+    payload) messages in arrival order; the end of the messages is the end of the input (what
+    is pending is released). Messages other than camera frames and IMU batches are skipped;
+    what the path drops is counted in path.dropped."""
+    frames = []
+    for arrival_ns, type_name, payload in messages:
+        if type_name not in INPUT_TYPES:
+            continue
+        path.feed(type_name, payload, arrival_ns)
+        frames += path.take_ready(arrival_ns)
+    return frames + path.flush()
