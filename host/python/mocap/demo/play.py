@@ -9,7 +9,7 @@ import dataclasses
 import json
 import subprocess
 import sys
-import threading
+import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -20,7 +20,6 @@ from mocap import paths
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
 from mocap.net import transport, wire
-from mocap.recording import recorder
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
 LEAD_S = 4.0  # between launching the processes and the take's first frame
@@ -54,6 +53,17 @@ def _calibrator_command(studio: Studio, duration: float) -> list[str]:
     return [sys.executable, "-m", "mocap.cli", "calibrate", "--connect", *edge_endpoints,
             "--session", str(studio.session), "--out", str(studio.calibrated), "--follow",
             "--publish", studio.calibrator, "--duration", f"{LEAD_S + duration + 1.0:.3f}"]
+
+
+def _recorder_command(studio: Studio, path: Path, duration: float) -> list[str]:
+    """`mocap record` of every stream (the edge boxes', the calibrator's, mocapd's poses and
+    Health), with the session attached. A process of its
+    own, as in a studio: a recorder thread in this process shared the interpreter with the
+    consumer, and its arrival stamps came up to tens of ms late — later than the synchroniser
+    waits — so the recording solved again dropped camera frames mocapd had used."""
+    inputs = [*studio.endpoints.values(), *([studio.calibrator] if studio.calibrator else [])]
+    return [sys.executable, "-m", "mocap.cli", "record", "--connect", *inputs, "--out", str(path),
+            "--session", str(studio.session), "--seconds", f"{LEAD_S + duration + 2.0:.3f}"]
 
 
 @dataclasses.dataclass
@@ -109,12 +119,7 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     if studio.calibrator:
         commands.append(_calibrator_command(studio, duration))
     edge = [subprocess.Popen(cmd) for cmd in commands]
-    recorder_thread, stop = None, threading.Event()
-    if record:
-        inputs = [*studio.endpoints.values(), *([studio.calibrator] if studio.calibrator else [])]
-        recorder_thread = threading.Thread(target=recorder.record, args=(inputs, record),
-                                           kwargs={"stop": stop, "session": studio.session}, daemon=True)
-        recorder_thread.start()
+    recording = subprocess.Popen(_recorder_command(studio, record, duration)) if record else None
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]])
     try:
         poses, healths = _collect(host, sub, progress, on_pose)
@@ -127,8 +132,8 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
             if p.poll() is None:
                 p.terminate()
             p.wait(timeout=10)
+        if recording is not None:  # it closes its file on SIGINT, as at Ctrl-C
+            recording.send_signal(signal.SIGINT)
+            recording.wait(timeout=10)
         sub.close()
-        stop.set()
-        if recorder_thread:
-            recorder_thread.join(timeout=10)
     return Run(poses, healths, summary, start_ns)

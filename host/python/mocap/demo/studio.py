@@ -18,14 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, paths
-from mocap.calibration import informative, window
-from mocap.calibration.calibration_input import CalibrationInput
-from mocap.calibration.readings import readings_at
+from mocap.calibration import from_messages, window
 from mocap.errors import InputError
 from mocap.io.session import Session, SyncSettings
-from mocap.model.solver import imu_set_json, layout_json
+from mocap.model.solver import imu_set_json
 from mocap.sim import demo_motion
 from mocap.sim import take as sim_take
+from mocap_edge import offline
 from mocap_edge.streams import Streams
 
 IMU_RATE = 100.0  # Hz
@@ -52,17 +51,15 @@ class Studio:
         return self.session.parent / "calibrated"
 
 
-def calibrate(streams: Streams, rig: _core.Rig, imu_bones: list[int]) -> window.Calibration:
-    """The calibration from the first seconds with motion of the streams, as `mocap calibrate`
-    makes a studio's session (mocap.calibration.window, informative): nothing of the truth."""
-    keypoints = np.where(streams.detected[:, None, None, None], streams.keypoints, 0.0).astype(float)
-    times = streams.frame_times_ns * 1e-9
-    imu_times = streams.imu_times_ns * 1e-9
-    readings = readings_at(times, [(name, bone, imu_times, streams.imu_quaternions[:, i],
-                                    streams.imu_accelerations[:, i])
-                                   for i, (name, bone) in enumerate(zip(streams.imu_ids, imu_bones))])
-    return informative.estimate(rig, CalibrationInput.from_arrays(keypoints, times, streams.layout, readings,
-                                                                 streams.detected))[0]
+def calibrate(session: Path, streams: Path, detect_every: tuple[int, int]) -> _core.Skeleton:
+    """Calibrates `session` (in its own folder) from the first seconds with motion of the
+    messages the edge boxes send for the stream file (mocap_edge.offline), as `mocap calibrate
+    --recording` calibrates a studio's session: nothing of the truth. The estimated skeleton."""
+    messages = [(t, m.DESCRIPTOR.full_name, m.SerializeToString())
+                for t, m in offline.studio_messages(streams, 0, detect_every)]
+    estimated = from_messages.estimate(messages, session, window.SECONDS, "the simulated studio")
+    from_messages.write_session(session.parent, session, estimated, estimated.report)
+    return _core.Skeleton.from_json(estimated.skeleton_json)
 
 
 def free_ports(n: int) -> list[int]:
@@ -101,15 +98,11 @@ def _simulate(seconds: float, preset: str, cameras: int | None, rng: np.random.G
 
 def _calibration_files(folder: Path, calibration: str, skeleton: _core.Skeleton, t: sim_take.Take, streams: Streams,
                        preset: str) -> tuple[_core.Skeleton, str]:
-    """Writes the session's skeleton and IMU set (and layout, when estimated) as the
-    calibration says; the session's skeleton and layout file."""
+    """Writes the session's skeleton and IMU set as the calibration says (the truth's, or
+    the default skeleton with the IMU set's bones when it is to be estimated); the session's
+    skeleton and layout file."""
     session_skeleton, imus, layout = skeleton, t.imus, str(paths.LAYOUTS / f"{t.layout.name}.json")
-    if calibration == "estimated":
-        cal = calibrate(streams, t.rig, [s.bone for s in t.imus])
-        session_skeleton, imus, layout = cal.skeleton, cal.imus, "layout.json"
-        (folder / "calibration.json").write_text(json.dumps(cal.report, indent=1))
-        (folder / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
-    elif calibration == "live":  # what a studio knows before the performer moves: the IMU set's bones
+    if calibration in ("estimated", "live"):  # what a studio knows before the performer moves: the IMU set's bones
         session_skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
         imus = _core.load_imu_sites(str(paths.IMU_SETS[sim_take.PRESETS[preset].imus]), session_skeleton)
     (folder / "skeleton.json").write_text(session_skeleton.to_json())
@@ -138,7 +131,10 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
                       prior=str(paths.HOST_DATA / "prior_default.json"), sync=SyncSettings(),
                       solver={} if calibration == "oracle" else {"heading_time_constant": window.HEADING_TIME_CONSTANT_S},
                       imus_calibrated=calibration != "live")
-    return Studio(session.save(folder / "session.json"), folder / "streams.npz", skeleton, thetas, t.times,
-                  camera_ids, {k: v for k, v in endpoints.items() if k != "calibrator"}, session_skeleton,
-                  calibration, endpoints["calibrator"] if calibration == "live" else None,
-                  (sim_take.PRESETS[preset].period, sim_take.PRESETS[preset].burst))
+    detect_every = (sim_take.PRESETS[preset].period, sim_take.PRESETS[preset].burst)
+    path = session.save(folder / "session.json")
+    if calibration == "estimated":
+        session_skeleton = calibrate(path, folder / "streams.npz", detect_every)
+    return Studio(path, folder / "streams.npz", skeleton, thetas, t.times, camera_ids,
+                  {k: v for k, v in endpoints.items() if k != "calibrator"}, session_skeleton, calibration,
+                  endpoints["calibrator"] if calibration == "live" else None, detect_every)
