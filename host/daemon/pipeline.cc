@@ -53,8 +53,14 @@ void HostPipeline::ApplyCalibrations(int64_t time_ns) {
 }
 
 std::vector<SolvedFrame> HostPipeline::Solve(int64_t now_ns) {
+  return SolveFrames(input_.TakeReady(now_ns));
+}
+
+std::vector<SolvedFrame> HostPipeline::Flush() { return SolveFrames(input_.Flush()); }
+
+std::vector<SolvedFrame> HostPipeline::SolveFrames(std::vector<SyncedFrame> frames) {
   std::vector<SolvedFrame> out;
-  for (SyncedFrame& f : input_.TakeReady(now_ns)) {
+  for (SyncedFrame& f : frames) {
     ApplyCalibrations(f.time_ns);
     const SolveResult r = step_.Solve(&f.observations);
     out.push_back({EncodePoseFrame(f.observations, r, f.time_ns, frames_solved_++,

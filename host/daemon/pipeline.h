@@ -45,6 +45,9 @@ class HostPipeline {
   }
   // Solves the frames ready at now_ns, oldest first.
   std::vector<SolvedFrame> Solve(int64_t now_ns);
+  // The end of the input (an offline solve's last message): solves every frame still
+  // pending, as InputPath::Flush releases them.
+  std::vector<SolvedFrame> Flush();
   // The publisher reports each frame's latency (publication - last input), milliseconds.
   void RecordLatency(double ms) { input_.monitor().RecordLatency(ms); }
   // Health over the period since the previous call (which it starts anew).
@@ -57,9 +60,12 @@ class HostPipeline {
   const std::vector<bool>& imus_calibrated() const { return step_.imus_calibrated(); }
   const std::map<std::string, uint64_t>& dropped() const { return input_.monitor().dropped(); }
   uint64_t frames_solved() const { return frames_solved_; }
+  // The solver's heading corrections (rad, per IMU of the session), as Health reports them.
+  const std::vector<double>& headings() const { return step_.solver().headings(); }
 
  private:
   HostPipeline(Session session, std::unique_ptr<Solver> solver);
+  std::vector<SolvedFrame> SolveFrames(std::vector<SyncedFrame> frames);
   bool FeedCalibration(const v1::Calibration& calibration, int64_t now_ns, std::string* why);
   // Applies the queued calibrations valid at or before time_ns.
   void ApplyCalibrations(int64_t time_ns);

@@ -123,6 +123,28 @@ TEST(Pipeline, PosesFollowTheStreamsAndBadMessagesAreCountedAndDropped) {
   EXPECT_EQ(health.streams(1).late(), 1u);
 }
 
+TEST(Pipeline, FlushSolvesWhatIsStillWaitingAtTheEndOfTheInput) {
+  // An offline solve's last frames wait for input that never comes: a camera that stopped
+  // delivering one frame early. Flush releases and solves them, once.
+  Studio studio;
+  auto pipeline = studio.Pipeline();
+  size_t solved = 0;
+  for (int k = 0; k < 10; ++k) {
+    const int64_t now = kT0 + k * kFrame + kMs;
+    pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now);
+    for (int c = 0; c < (k == 9 ? 3 : 4); ++c)
+      pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
+    solved += pipeline->Solve(now).size();
+  }
+  EXPECT_EQ(solved, 9u);
+  const std::vector<SolvedFrame> last = pipeline->Flush();
+  ASSERT_EQ(last.size(), 1u);
+  EXPECT_EQ(last[0].pose.capture_time_ns(), kT0 + 9 * kFrame);
+  EXPECT_EQ(last[0].pose.cameras_size(), 3);
+  EXPECT_TRUE(pipeline->Flush().empty());
+  EXPECT_EQ(pipeline->frames_solved(), 10u);
+}
+
 TEST(Pipeline, AStoppedCameraOrImuDegradesTheSolveWhichRecoversWhenItReturns) {
   Studio studio;
   auto pipeline = studio.Pipeline();

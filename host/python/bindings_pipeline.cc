@@ -23,16 +23,29 @@ py::tuple Feed(HostPipeline& p, py::bytes type, py::bytes payload, int64_t now_n
   return py::make_tuple(ok, why);
 }
 
+py::list Encoded(const std::vector<SolvedFrame>& frames) {
+  py::list out;
+  for (const SolvedFrame& f : frames)
+    out.append(py::make_tuple(py::bytes(f.pose.SerializeAsString()), f.last_input_ns));
+  return out;
+}
+
 py::list Solve(HostPipeline& p, int64_t now_ns) {
   std::vector<SolvedFrame> frames;
   {
     py::gil_scoped_release release;
     frames = p.Solve(now_ns);
   }
-  py::list out;
-  for (const SolvedFrame& f : frames)
-    out.append(py::make_tuple(py::bytes(f.pose.SerializeAsString()), f.last_input_ns));
-  return out;
+  return Encoded(frames);
+}
+
+py::list Flush(HostPipeline& p) {
+  std::vector<SolvedFrame> frames;
+  {
+    py::gil_scoped_release release;
+    frames = p.Flush();
+  }
+  return Encoded(frames);
 }
 
 }  // namespace
@@ -45,12 +58,15 @@ void BindPipeline(py::module_& m) {
            "Feed one message; (accepted, why it was dropped).")
       .def("solve", &Solve, py::arg("now_ns"),
            "Frames ready at now_ns: [(PoseFrame bytes, last input arrival ns)].")
+      .def("flush", &Flush, "The end of the input: every frame still pending, solved (as solve()).")
       .def("health", [](HostPipeline& p,
                         int64_t now_ns) { return py::bytes(p.Health(now_ns).SerializeAsString()); })
       .def_property_readonly("dropped", &HostPipeline::dropped)
       .def_property_readonly(
           "skeleton", [](const HostPipeline& p) { return p.session().skeleton; },
           "the skeleton in use: the session's, or the latest calibration's")
+      .def_property_readonly("headings", &HostPipeline::headings,
+                             "the solver's heading corrections (rad, per IMU of the session)")
       .def_property_readonly("calibrations_applied", &HostPipeline::calibrations_applied)
       .def_property_readonly("frames_solved", &HostPipeline::frames_solved);
 }

@@ -147,18 +147,18 @@ def test_pose2sims_balancing_trial_as_a_take_lands_near_its_own_3d(tmp_path):
     assert result["distance_cm"] < 4.5, result  # measured 3.6 (docs/results_real.md)
 
 
-def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated):
-    from mocap.calibration import window
-    from mocap.calibration.calibration_input import CalibrationInput
+def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated, tmp_path):
+    from mocap.calibration import from_messages
     from mocap.errors import InputError
+    from mocap.io import take_folder
     from mocap.io.take_folder import read_take
+    from mocap.takes import messages
 
     take = read_take(simulated[0])
-    det = take_solve.subject(take)
-    det[:, 1:] = 0.0  # only the first camera saw anything
+    take.people = [take.people[0]] + [[np.zeros((0, take_folder.KEYPOINTS[take.layout], 3))] * take.n_frames for _ in take.people[1:]]
+    session = messages.write_session(take, tmp_path / "session")
     with pytest.raises(InputError, match="two cameras"):
-        window.estimate(take.rig, CalibrationInput.from_arrays(det, np.arange(take.n_frames) / take.frame_rate,
-                                                               take.layout, None))
+        from_messages.estimate(messages.messages(take), session, 5.0, "take")
 
 
 def test_solve_wants_exactly_one_input(tmp_path):

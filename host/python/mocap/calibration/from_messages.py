@@ -75,36 +75,61 @@ class Estimated:
     report: dict
 
 
-def estimate(messages: Iterable[tuple[int, str, bytes]], session: Path, seconds: float, where: str,
-             quick: bool = False) -> Estimated:
-    """The calibration of `session`'s subject from (arrival ns, type name, payload) messages
-    of its cameras and IMU hubs in arrival order (a recording, or the live calibrator's last
-    seconds), synchronised as mocapd synchronises them; InputError when they cannot give one
-    (`where` names them). quick: window.estimate's."""
-    messages = list(messages)
+@dataclasses.dataclass
+class Synchronised:
+    """A session's messages as the calibration reads them."""
+    data: CalibrationInput  # the frames mocapd would solve
+    dropped: dict[str, int]  # what the input path dropped, by reason
+    rig: _core.Rig
+    imu_set: list[str]  # the session's IMU names
+
+
+def synchronised(messages: list[tuple[int, str, bytes]], session: Path, where: str) -> Synchronised:
+    """The frames mocapd would solve of (arrival ns, type name, payload) messages in arrival
+    order; InputError when no camera of the session detected anything (`where` names them)."""
     config = Session.load(session)
     skeleton = _core.Skeleton.load(str(config.file("skeleton")))
     rig = _core.Rig.load(str(config.file("rig")))
     imu_set = _core.load_imu_sites(str(config.file("imus")), skeleton)
-    path = frames.input_path(session)
-    synced = frames.synchronise(path, messages)
     layout = _core.KeypointLayout.load(str(config.file("layout")), skeleton)
-    data = CalibrationInput.from_frames(synced, len(rig.cameras), layout.name, len(layout.names),
-                                        [(s.name, s.bone) for s in imu_set])
+    path = frames.input_path(session)
+    data = CalibrationInput.from_frames(frames.synchronise(path, messages), len(rig.cameras), layout.name,
+                                        len(layout.names), [(s.name, s.bone) for s in imu_set])
     if data is None or not data.detected.any():
         raise InputError(f"{where}: no camera frame with detections of the session's cameras")
+    return Synchronised(data, dict(path.dropped), rig, [s.name for s in imu_set])
+
+
+def estimate(messages: Iterable[tuple[int, str, bytes]], session: Path, seconds: float, where: str,
+             quick: bool = False, video_if_still: bool = False) -> Estimated:
+    """The calibration of `session`'s subject from (arrival ns, type name, payload) messages
+    of its cameras and IMU hubs in arrival order (a recording, the live calibrator's last
+    seconds, a take folder's), synchronised as mocapd synchronises them; InputError when they
+    cannot give one (`where` names them). IMUs too still to calibrate: an InputError, or with
+    video_if_still a calibration without them (the report says why). quick: window.estimate's."""
+    messages = list(messages)
+    synced = synchronised(messages, session, where)
+    data = synced.data
     first, score, why_not = informative.calibration_window(data, seconds)
-    if why_not:
+    if why_not and not video_if_still:
         raise InputError(f"{where}: {why_not.split(';')[0]}: the performer should move (walk, "
                          f"swing the arms, bend) while the studio calibrates")
-    cal = window.estimate(rig, data, seconds=seconds, first_frame=first, quick=quick)
-    used = [] if data.readings is None else data.readings.names
-    span = [messages[0][0], messages[-1][0]]
+    used = data.without_imus() if why_not else data
+    cal = window.estimate(synced.rig, used, seconds=seconds, first_frame=first, quick=quick)
+    names = [] if used.readings is None else used.readings.names
+    window_frames = int(np.searchsorted(data.times, data.times[first] + seconds) - first)
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),
-                     {"frames": data.frames, "first_frame_time_ns": data.first_time_ns, "span_ns": span,
-                      "dropped": dict(path.dropped), "window_motion_score_deg": score, "imus_calibrated": used,
-                      "imus_missing": [s.name for s in imu_set if s.name not in used], "window": cal.report})
+                     {"frames": data.frames, "first_frame_time_ns": data.first_time_ns,
+                      "span_ns": [messages[0][0], messages[-1][0]], "dropped": synced.dropped,
+                      "window_motion_score_deg": score, "imus_calibrated": names,
+                      "imus_missing": [s for s in synced.imu_set if data.readings is None
+                                       or s not in data.readings.names],
+                      "imus_not_used_because": why_not,
+                      "skeleton": {"from_frames": window_frames, "scales": cal.skeleton_start.scales,
+                                   "lengths_m": cal.skeleton_start.lengths_m,
+                                   "frames_per_length": cal.skeleton_start.frames},
+                      "window": cal.report})
 
 
 def write_session(out: Path, session: Path, estimated: Estimated, report: dict) -> None:

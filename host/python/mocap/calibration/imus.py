@@ -88,12 +88,3 @@ def calibrate(sensor: str, bone: str, bone_world: np.ndarray, readings: np.ndarr
         if robust_pass == 0:
             use = r <= max(3.0 * np.median(r), 2.0)
     return best
-
-
-def at_times(times: np.ndarray, samples_t: np.ndarray, quaternions: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) orientations at `times`, slerped between the samples (held at the ends)."""
-    r = rotations.matrix_from_quaternion(quaternions)
-    i = np.clip(np.searchsorted(samples_t, times) - 1, 0, len(samples_t) - 2)
-    w = np.clip((times - samples_t[i]) / np.maximum(samples_t[i + 1] - samples_t[i], 1e-12), 0.0, 1.0)
-    step = rotations.log(np.swapaxes(r[i], -1, -2) @ r[i + 1])
-    return r[i] @ rotations.exp(step * w[:, None])

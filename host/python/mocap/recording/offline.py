@@ -1,10 +1,13 @@
-"""Offline solve of a recording: the recorded inputs fed through the live host's own
-pipeline (C++ HostPipeline: decode, synchronise, solve) in arrival order, with their
-recorded arrival times — the result is what the live host would have published."""
+"""Offline solve of a recording (or of any timestamped messages: a take folder's): the
+inputs fed through the live host's own pipeline (C++ HostPipeline: decode, synchronise,
+solve) in arrival order, with their arrival times — the result is what the live host would
+have published. The end of the messages is the end of the input: what is still pending is
+released as the input path releases it (InputPath::Flush), and solved."""
 
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +17,7 @@ from mocap.errors import InputError
 from mocap.net import wire
 from mocap.recording import reader
 
-FLUSH_NS = 1_000_000_000  # after the last input: frames still waiting are handed over
+INPUT_TOPICS = ("/camera/", "/imu/", "/calibration/")
 
 
 def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict, _core.Skeleton]:
@@ -28,16 +31,28 @@ def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict
             if attached is None:
                 raise InputError(f"{path}: no session is attached to this recording; give its session file")
             return solve_recording(path, attached)
-    pipeline = _core.HostPipeline.load(str(session))
-    poses, now = [], 0
-    for m in reader.read(path):
-        if not m.topic.startswith(("/camera/", "/imu/", "/calibration/")):
-            continue
-        now = m.log_time_ns
-        pipeline.feed(m.type_name.encode(), m.payload, now)
-        poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now)]
-    poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(now + FLUSH_NS)]
-    return poses, dict(pipeline.dropped), pipeline.skeleton
+    messages = ((m.log_time_ns, m.type_name, m.payload) for m in reader.read(path) if m.topic.startswith(INPUT_TOPICS))
+    pipeline = pipeline_for(session)
+    return solve_messages(pipeline, messages), dict(pipeline.dropped), pipeline.skeleton
+
+
+def pipeline_for(session: Path) -> _core.HostPipeline:
+    """The live host's pipeline for `session`; InputError when mocapd would refuse it."""
+    try:
+        return _core.HostPipeline.load(str(session))
+    except ValueError as e:
+        raise InputError(f"{session}: {e}") from None
+
+
+def solve_messages(pipeline: _core.HostPipeline, messages: Iterable[tuple[int, str, bytes]]) -> list:
+    """PoseFrames of (arrival ns, type name, payload) messages in arrival order, solved by
+    `pipeline` as they come; the end of the messages is the end of the input. What the
+    pipeline drops is counted in pipeline.dropped."""
+    poses = []
+    for arrival_ns, type_name, payload in messages:
+        pipeline.feed(type_name.encode(), payload, arrival_ns)
+        poses += [wire.PoseFrame.FromString(p) for p, _ in pipeline.solve(arrival_ns)]
+    return poses + [wire.PoseFrame.FromString(p) for p, _ in pipeline.flush()]
 
 
 def joint_positions(poses: list) -> np.ndarray:

@@ -1,77 +1,82 @@
 """`mocap solve --take DIR --out OUTDIR`: a take folder (docs/take_format.md) solved
-without oracles: the subject chosen per camera and frame, the calibration estimated from
-the take's first 5 s with enough motion (mocap.calibration.informative: where the IMUs
-tilt; the first 5 s without IMUs) by mocap.calibration.window (skeleton, keypoint sites, IMU
-mountings, headings and positions), then every frame solved with the IMUs (E_R, E_P, E_A and
-the prior), or video only when the take has no IMUs or they never move enough to calibrate.
+without oracles, by the live host's own input path and solve: the take becomes the messages
+its cameras and IMUs would have sent (mocap.takes.messages), the calibration is estimated
+from them as from a recording (mocap.calibration.from_messages: the subject chosen per
+camera and frame by the host, the first 5 s with enough motion — where the IMUs tilt; the
+first 5 s without IMUs — skeleton, keypoint sites, IMU mountings, headings and positions),
+then the same messages are solved by the host's pipeline with that calibration, with the
+IMUs (E_R, E_P, E_A and the prior), or video only when the take has no IMUs or they never
+move enough to calibrate.
 
 Writes OUTDIR/joints.csv (frame, time_s, then <joint>_x, _y, _z in metres in the take's
-world frame: joint centres of the solved skeleton), OUTDIR/take.bvh, OUTDIR/skeleton.json and
-OUTDIR/imus.json (the estimated skeleton and IMU sites in the solver's formats) and
-OUTDIR/calibration.json + calibration.md (what was estimated, from how many frames).
+world frame: joint centres of the solved skeleton), OUTDIR/take.bvh, OUTDIR/skeleton.json,
+OUTDIR/imus.json and OUTDIR/layout.json (the estimated calibration in the solver's formats),
+OUTDIR/calibration.json + calibration.md (what was estimated, from how many frames) and
+OUTDIR/session/ (the calibrated session the take was solved with).
 """
 from __future__ import annotations
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths
-from mocap.calibration import informative, window
-from mocap.calibration.calibration_input import CalibrationInput
-from mocap.calibration.readings import readings_at
+from mocap import _core
+from mocap.calibration import from_messages, window
 from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
 from mocap.io.take_folder import TakeFolder, read_take
 from mocap.model.joint_centres import JOINTS, bone_indices
-from mocap.model.solver import Solver, imu_set_json, layout_json
-from mocap.model.subject import LAYOUT_SIZES, choose_subject
+from mocap.net import wire
+from mocap.recording import offline
+from mocap.takes import messages as take_messages
 from mocap.takes.report import markdown
 
-
-def subject(take: TakeFolder) -> np.ndarray:
-    """(F, C, K, 3) the subject's keypoints of a take (mocap.model.subject.choose_subject)."""
-    return choose_subject(take.people, take.n_frames, LAYOUT_SIZES[take.layout])
+STATUS_NAMES = {v: k.removeprefix("STATUS_").lower() for k, v in wire.PoseFrame.Status.items()}
 
 
 def solve_take(folder: Path, out: Path) -> dict:
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
-    det = subject(take)
-    times = np.arange(take.n_frames) / take.frame_rate
-    bones = _core.Skeleton.load(str(paths.DEFAULT_SKELETON)).bone_names
-    readings = readings_at(times, [(m.sensor, bones.index(m.bone), m.times_s, m.quaternions, m.accelerations)
-                                   for m in take.imus]) if take.imus else None
-    cal, score, why_not = informative.estimate(take.rig, CalibrationInput.from_arrays(det, times, take.layout,
-                                                                                      readings))
-    if why_not:
-        readings = None
-    solver = Solver(cal.skeleton, take.rig, cal.layout, cal.imus, options=window.solver_options())
-    thetas, statuses = window.solve_frames(solver, det, times, readings)
-    out.mkdir(parents=True, exist_ok=True)
-    _write_joints(out / "joints.csv", cal.skeleton, thetas, take)
-    write_bvh(out / "take.bvh", cal.skeleton, thetas, take.frame_rate)
-    start = cal.skeleton_start
+    messages = take_messages.messages(take)
+    session = take_messages.write_session(take, out / "session")
+    estimated = from_messages.estimate(messages, session, window.SECONDS, str(folder), video_if_still=True)
+    from_messages.write_session(out / "session", session, estimated, estimated.report)
+    pipeline = offline.pipeline_for(session)
+    thetas, statuses = _per_frame(offline.solve_messages(pipeline, messages), take)
+    skeleton = pipeline.skeleton
+    _write_joints(out / "joints.csv", skeleton, thetas, take)
+    write_bvh(out / "take.bvh", skeleton, thetas, take.frame_rate)
+    imus = [s["name"] for s in json.loads(estimated.imus_json)["imus"]]
+    r = estimated.report
     report = {"frames": take.n_frames, "frame_rate": take.frame_rate, "cameras": len(take.rig.cameras),
-              "layout": take.layout, "imus_used": len(cal.imus), "imus_not_used_because": why_not,
-              "window_motion_score_deg": score,
-              "skeleton": {"from_frames": int(np.diff(np.searchsorted(times, times[0] + cal.report["window_start_s"]
-                                                                      + np.array([0.0, window.SECONDS])))[0]),
-                           "scales": start.scales,
-                           "lengths_m": start.lengths_m, "frames_per_length": start.frames},
-              "window": cal.report, "solve": {"statuses": {s: statuses.count(s) for s in set(statuses)},
-                                              # the heading tracking's correction at the take's end
-                                              "heading_change_deg": {s.name: float(np.degrees(h)) for s, h in
-                                                                     zip(cal.imus, solver.headings)}}}
+              "layout": take.layout, "imus_used": len(imus), "imus_not_used_because": r["imus_not_used_because"],
+              "window_motion_score_deg": r["window_motion_score_deg"], "skeleton": r["skeleton"],
+              "window": r["window"], "dropped": r["dropped"],
+              "solve": {"statuses": {s: statuses.count(s) for s in sorted(set(statuses))},
+                        # the heading tracking's correction at the take's end
+                        "heading_change_deg": {n: float(np.degrees(h)) for n, h in zip(imus, pipeline.headings)}}}
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
-    (out / "skeleton.json").write_text(cal.skeleton.to_json())
-    (out / "imus.json").write_text(json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1))
-    (out / "layout.json").write_text(json.dumps(layout_json(cal.skeleton, cal.layout), indent=1))
+    for name in ("skeleton.json", "imus.json", "layout.json"):
+        shutil.copyfile(out / "session" / name, out / name)
     (out / "calibration.md").write_text(markdown(report))
     return report
+
+
+def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str]]:
+    """(F, 66) poses and statuses of the take's video frames, from the solved PoseFrames
+    (matched by capture time); InputError when the host solved a different set of frames."""
+    times = take_messages.frame_time_ns(take, np.arange(take.n_frames))
+    by_time = {p.capture_time_ns: p for p in poses}
+    missing = [f for f, t in enumerate(times) if int(t) not in by_time]
+    if missing:
+        raise InputError(f"the host did not solve {len(missing)} of the take's {take.n_frames} frames "
+                         f"(the first: {missing[0]})")
+    chosen = [by_time[int(t)] for t in times]
+    return np.array([p.theta for p in chosen]), [STATUS_NAMES[p.status] for p in chosen]
 
 
 def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: TakeFolder) -> None:
