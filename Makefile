@@ -29,6 +29,6 @@ lint:             ## formatting of the C++ code, static checks of the Python cod
 	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')
 	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests firmware
 	$(CURDIR)/.venv/bin/lint-imports pyproject.toml
-	$(PY) scripts/check_sizes.py host/python edge/python tests firmware
+	$(PY) scripts/check_sizes.py host edge firmware tests
 	@test -f host/python/mocap/_core*.so || { echo "run 'make build' first (the options check reads the bindings)"; exit 1; }
 	$(PY) -m pytest -q host/python/tests/test_options_fields.py host/python/tests/test_session.py

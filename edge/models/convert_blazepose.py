@@ -245,20 +245,13 @@ def diff_report(name: str, ref: list[dict], got: list[dict]) -> None:
                 print(f"    {part} {d:.3g}")
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, required=True, help="folder for the .onnx files, LICENSE, graph configs")
-    ap.add_argument("--fixtures", type=Path, help="folder for the test fixtures (inputs as PNG, TFLite outputs)")
-    args = ap.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
-    mp_dir = package_dir("mediapipe")
-    shutil.copy(next(mp_dir.parent.glob("mediapipe-0.10.14.dist-info")) / "LICENSE", args.out / "LICENSE")
-    dump_graph_configs(mp_dir, args.out / "mediapipe_graphs.pbtxt")
-
+def convert_models(mp_dir: Path, out: Path) -> tuple[dict, dict]:
+    """Each model converted to ONNX in `out` (DENSIFY baked, canonical names, the edge
+    variant), with its hashes printed: (ONNX sessions, TFLite interpreters) by name."""
     sessions, interpreters = {}, {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, sub in MODELS.items():
-            src, baked, dst = mp_dir / sub / f"{name}.tflite", Path(tmp) / f"{name}.tflite", args.out / f"{name}.onnx"
+            src, baked, dst = mp_dir / sub / f"{name}.tflite", Path(tmp) / f"{name}.tflite", out / f"{name}.onnx"
             print(f"{name}: sha256 tflite {hashlib.sha256(src.read_bytes()).hexdigest()}")
             print(f"  baked {bake_densify(src, baked)} DENSIFY ops")
             tf2onnx.convert.from_tflite(str(baked), opset=13, output_path=str(dst))
@@ -275,6 +268,20 @@ def main() -> None:
             opts = ort.SessionOptions()
             opts.intra_op_num_threads = 2
             sessions[name] = ort.InferenceSession(str(dst), opts, providers=["CPUExecutionProvider"])
+    return sessions, interpreters
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, required=True, help="folder for the .onnx files, LICENSE, graph configs")
+    ap.add_argument("--fixtures", type=Path, help="folder for the test fixtures (inputs as PNG, TFLite outputs)")
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    mp_dir = package_dir("mediapipe")
+    shutil.copy(next(mp_dir.parent.glob("mediapipe-0.10.14.dist-info")) / "LICENSE", args.out / "LICENSE")
+    dump_graph_configs(mp_dir, args.out / "mediapipe_graphs.pbtxt")
+
+    sessions, interpreters = convert_models(mp_dir, args.out)
 
     def both(name: str, inputs: list[np.ndarray]) -> tuple[list[dict], list[dict]]:
         sess = sessions[name]

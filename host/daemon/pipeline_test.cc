@@ -205,85 +205,33 @@ v1::Calibration CalibrationOf(const Scene& scene, int64_t valid_from_ns) {
   return c;
 }
 
-// A session started before its IMUs are calibrated (a skeleton 6% off, IMU mountings
-// unknown): solved from video alone until a Calibration comes, then with the IMUs and the
-// calibration's skeleton from the frame captured at its valid_from_ns on. Calibrations that
-// do not fit the session are counted and dropped, and change nothing.
-TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
-  Studio studio;
-  Scene told = studio.scene;
-  std::vector<Skeleton::Bone> bones = told.skeleton.bones();
-  for (Skeleton::Bone& b : bones) b.offset *= 1.06;
-  std::string error;
-  ASSERT_TRUE(Skeleton::Create(bones, &told.skeleton, &error)) << error;
-  for (ImuSite& i : told.imus) i.mount.setIdentity(), i.reference.setIdentity();
-  auto pipeline = studio.Pipeline(&told, false);
-
-  Scene renamed = studio.scene;  // bad calibrations
-  bones = renamed.skeleton.bones();
+// Calibrations that do not fit the session (a renamed bone, an unknown IMU, broken JSON, an
+// empty message): each refused.
+void FeedBadCalibrations(HostPipeline* pipeline, const Studio& studio, int64_t now) {
+  Scene renamed = studio.scene;
+  std::vector<Skeleton::Bone> bones = renamed.skeleton.bones();
   bones[4].name = "tail";
+  std::string error;
   ASSERT_TRUE(Skeleton::Create(bones, &renamed.skeleton, &error)) << error;
   Scene stranger = studio.scene;
   stranger.imus[2].name = "stranger";
+  for (const Scene* bad : {&renamed, &stranger}) {
+    EXPECT_FALSE(
+        pipeline->Feed("mocap.v1.Calibration", CalibrationOf(*bad, kT0).SerializeAsString(), now));
+  }
   v1::Calibration broken = CalibrationOf(studio.scene, kT0);
   broken.set_imus_json("{\"format\": \"mocap.imus/1\", \"imus\": [");
-  Scene partial = studio.scene;  // the left forearm's sensor left out
-  const std::string left_out = partial.imus[5].name;
-  partial.imus.erase(partial.imus.begin() + 5);
+  EXPECT_FALSE(pipeline->Feed("mocap.v1.Calibration", broken.SerializeAsString(), now));
+  v1::Calibration empty;
+  EXPECT_FALSE(pipeline->Feed("mocap.v1.Calibration", empty.SerializeAsString(), now));
+}
 
-  std::vector<SolvedFrame> out;
-  for (int k = 0; k < 60; ++k) {
-    const int64_t now = kT0 + k * kFrame + kMs;
-    if (k == 5) {
-      for (const Scene* bad : {&renamed, &stranger}) {
-        EXPECT_FALSE(pipeline->Feed("mocap.v1.Calibration",
-                                    CalibrationOf(*bad, kT0).SerializeAsString(), now));
-      }
-      EXPECT_FALSE(pipeline->Feed("mocap.v1.Calibration", broken.SerializeAsString(), now));
-      v1::Calibration empty;
-      EXPECT_FALSE(pipeline->Feed("mocap.v1.Calibration", empty.SerializeAsString(), now));
-      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration",
-                                 CalibrationOf(studio.scene, kT0 + 20 * kFrame).SerializeAsString(),
-                                 now));
-      v1::Calibration second = CalibrationOf(partial, kT0 + 40 * kFrame);
-      second.set_sequence(1);
-      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", second.SerializeAsString(), now));
-    }
-    if (k == 45) {  // the calibrator repeats its latest (for late joiners): taken once only
-      v1::Calibration again = CalibrationOf(partial, kT0 + 40 * kFrame);
-      again.set_sequence(1);
-      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", again.SerializeAsString(), now));
-    }
-    pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now);
-    for (int c = 0; c < 4; ++c)
-      pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
-    for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
-  }
-  ASSERT_EQ(out.size(), 60u);
-  for (size_t k = 0; k < out.size(); ++k) {
-    const v1::PoseFrame& p = out[k].pose;
-    EXPECT_EQ(p.imus_size(), k < 20 ? 0 : k < 40 ? 13 : 12) << k;
-    if (k >= 40) {
-      for (const std::string& name : p.imus()) EXPECT_NE(name, left_out);
-    }
-    // From the calibration on, the bones published are the calibration's (the true ones).
-    const Eigen::Vector3d shin(p.joints(studio.scene.skeleton.BoneIndex("shin_l")).px(),
-                               p.joints(studio.scene.skeleton.BoneIndex("shin_l")).py(),
-                               p.joints(studio.scene.skeleton.BoneIndex("shin_l")).pz());
-    const Eigen::Vector3d foot(p.joints(studio.scene.skeleton.BoneIndex("foot_l")).px(),
-                               p.joints(studio.scene.skeleton.BoneIndex("foot_l")).py(),
-                               p.joints(studio.scene.skeleton.BoneIndex("foot_l")).pz());
-    const double shin_length =
-        studio.scene.skeleton.bone(studio.scene.skeleton.BoneIndex("foot_l")).offset.norm();
-    EXPECT_NEAR((foot - shin).norm(), k < 20 ? 1.06 * shin_length : shin_length, 1e-6) << k;
-    const Eigen::VectorXd theta =
-        Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
-    if (k >= 22) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.002) << k;
-  }
-  EXPECT_EQ(pipeline->calibrations_applied(), 2u);
-  EXPECT_EQ(pipeline->dropped().at("invalid_calibration"), 3u);
-  EXPECT_EQ(pipeline->dropped().at("invalid"), 1u);  // the empty one, by the wire check
-  const v1::Health health = pipeline->Health(kT0 + 60 * kFrame);
+Eigen::Vector3d JointOf(const v1::PoseFrame& p, const Skeleton& skeleton, const std::string& bone) {
+  const v1::JointTransform& j = p.joints(skeleton.BoneIndex(bone));
+  return {j.px(), j.py(), j.pz()};
+}
+
+void ExpectCalibrationStreamCounts(const v1::Health& health) {
   const auto it =
       std::find_if(health.streams().begin(), health.streams().end(),
                    [](const v1::StreamHealth& s) { return s.stream() == "calibration"; });
@@ -297,6 +245,65 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
                                   [](const v1::StreamHealth& s) { return s.stream() == "input"; });
   ASSERT_NE(input, health.streams().end());
   EXPECT_EQ(input->malformed(), 1u);  // the empty one; the rejected calibrations are counted above
+}
+
+// A session started before its IMUs are calibrated (a skeleton 6% off, IMU mountings
+// unknown): solved from video alone until a Calibration comes, then with the IMUs and the
+// calibration's skeleton from the frame captured at its valid_from_ns on. Calibrations that
+// do not fit the session are counted and dropped, and change nothing.
+TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
+  Studio studio;
+  Scene told = studio.scene;
+  std::vector<Skeleton::Bone> bones = told.skeleton.bones();
+  for (Skeleton::Bone& b : bones) b.offset *= 1.06;
+  std::string error;
+  ASSERT_TRUE(Skeleton::Create(bones, &told.skeleton, &error)) << error;
+  for (ImuSite& i : told.imus) i.mount.setIdentity(), i.reference.setIdentity();
+  auto pipeline = studio.Pipeline(&told, false);
+  Scene partial = studio.scene;  // the left forearm's sensor left out
+  const std::string left_out = partial.imus[5].name;
+  partial.imus.erase(partial.imus.begin() + 5);
+  v1::Calibration second = CalibrationOf(partial, kT0 + 40 * kFrame);
+  second.set_sequence(1);
+
+  std::vector<SolvedFrame> out;
+  for (int k = 0; k < 60; ++k) {
+    const int64_t now = kT0 + k * kFrame + kMs;
+    if (k == 5) {
+      FeedBadCalibrations(pipeline.get(), studio, now);
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration",
+                                 CalibrationOf(studio.scene, kT0 + 20 * kFrame).SerializeAsString(),
+                                 now));
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", second.SerializeAsString(), now));
+    }
+    if (k == 45)  // the calibrator repeats its latest (for late joiners): taken once only
+      EXPECT_TRUE(pipeline->Feed("mocap.v1.Calibration", second.SerializeAsString(), now));
+    pipeline->Feed("mocap.v1.ImuBatch", studio.Imus(k), now);
+    for (int c = 0; c < 4; ++c)
+      pipeline->Feed("mocap.v1.KeypointFrame", studio.Keypoints(k, c), now);
+    for (auto& f : pipeline->Solve(now)) out.push_back(std::move(f));
+  }
+  ASSERT_EQ(out.size(), 60u);
+  const Skeleton& truth = studio.scene.skeleton;
+  const double shin_length = truth.bone(truth.BoneIndex("foot_l")).offset.norm();
+  for (size_t k = 0; k < out.size(); ++k) {
+    const v1::PoseFrame& p = out[k].pose;
+    EXPECT_EQ(p.imus_size(), k < 20 ? 0 : k < 40 ? 13 : 12) << k;
+    if (k >= 40) {
+      for (const std::string& name : p.imus()) EXPECT_NE(name, left_out);
+    }
+    // From the calibration on, the bones published are the calibration's (the true ones).
+    EXPECT_NEAR((JointOf(p, truth, "foot_l") - JointOf(p, truth, "shin_l")).norm(),
+                k < 20 ? 1.06 * shin_length : shin_length, 1e-6)
+        << k;
+    const Eigen::VectorXd theta =
+        Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
+    if (k >= 22) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.002) << k;
+  }
+  EXPECT_EQ(pipeline->calibrations_applied(), 2u);
+  EXPECT_EQ(pipeline->dropped().at("invalid_calibration"), 3u);
+  EXPECT_EQ(pipeline->dropped().at("invalid"), 1u);  // the empty one, by the wire check
+  ExpectCalibrationStreamCounts(pipeline->Health(kT0 + 60 * kFrame));
 }
 
 TEST(Pipeline, ASessionFileThatIsWrongSaysWhat) {

@@ -4,13 +4,11 @@
 
 namespace mocap {
 
-CleanFrame ValidateFrame(const FrameObservations& frame, const Rig& rig,
-                         const KeypointLayout& layout, const std::vector<ImuSite>& imus,
-                         const SolverOptions& options, InputCounts* counts) {
-  CleanFrame clean;
-  clean.timestamp = frame.timestamp;
-  clean.imu_world.assign(imus.size(), std::nullopt);
-  clean.accel_world.assign(imus.size(), std::nullopt);
+namespace {
+
+// The detections of the frame's cameras: plausible keypoints above min_confidence.
+void CleanKeypoints(const FrameObservations& frame, const Rig& rig, const KeypointLayout& layout,
+                    const SolverOptions& options, CleanFrame* clean, InputCounts* counts) {
   std::vector<bool> camera_seen(rig.cameras.size(), false);
   for (const CameraObservation& obs : frame.cameras) {
     if (obs.camera < 0 || obs.camera >= static_cast<int>(rig.cameras.size()) ||
@@ -32,10 +30,15 @@ CleanFrame ValidateFrame(const FrameObservations& frame, const Rig& rig,
       } else if (kp.confidence <= options.min_confidence) {
         ++counts->keypoints_not_detected;
       } else {
-        clean.detections.push_back({obs.camera, k, {kp.x, kp.y}, std::min(kp.confidence, 1.0)});
+        clean->detections.push_back({obs.camera, k, {kp.x, kp.y}, std::min(kp.confidence, 1.0)});
       }
     }
   }
+}
+
+// The IMUs' orientations and accelerations in the world frame, where they are valid.
+void CleanImus(const FrameObservations& frame, const std::vector<ImuSite>& imus,
+               const SolverOptions& options, CleanFrame* clean, InputCounts* counts) {
   std::vector<bool> imu_seen(imus.size(), false);
   for (const ImuObservation& obs : frame.imus) {
     if (obs.imu < 0 || obs.imu >= static_cast<int>(imus.size()) || imu_seen[obs.imu]) {
@@ -54,15 +57,28 @@ CleanFrame ValidateFrame(const FrameObservations& frame, const Rig& rig,
     const Eigen::Matrix3d world =
         imus[obs.imu].reference *
         Eigen::Quaterniond(obs.orientation.coeffs() / qn).toRotationMatrix();
-    clean.imu_world[obs.imu] = world;
+    clean->imu_world[obs.imu] = world;
     if (obs.has_acceleration) {
       if (obs.acceleration.allFinite()) {
-        clean.accel_world[obs.imu] = world * obs.acceleration - options.accel_at_rest;
+        clean->accel_world[obs.imu] = world * obs.acceleration - options.accel_at_rest;
       } else {
         ++counts->accelerations_invalid;
       }
     }
   }
+}
+
+}  // namespace
+
+CleanFrame ValidateFrame(const FrameObservations& frame, const Rig& rig,
+                         const KeypointLayout& layout, const std::vector<ImuSite>& imus,
+                         const SolverOptions& options, InputCounts* counts) {
+  CleanFrame clean;
+  clean.timestamp = frame.timestamp;
+  clean.imu_world.assign(imus.size(), std::nullopt);
+  clean.accel_world.assign(imus.size(), std::nullopt);
+  CleanKeypoints(frame, rig, layout, options, &clean, counts);
+  CleanImus(frame, imus, options, &clean, counts);
   return clean;
 }
 

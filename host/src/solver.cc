@@ -177,104 +177,6 @@ void Solver::SetWarmStart(const Eigen::VectorXd& theta) {
   warm_start_given_ = true;
 }
 
-bool Solver::AccelerationUsable(double timestamp, bool reacquiring) const {
-  if (!motion_ || reacquiring) return false;
-  const double h2 = timestamp - motion_->timestamp;
-  return h2 > 0.0 && h2 <= options_.max_history_gap;
-}
-
-bool Solver::PredictionUsable(double timestamp) const {
-  if (history_.size() < 2) return false;
-  const double h1 = history_[1].timestamp - history_[0].timestamp;
-  const double h2 = timestamp - history_[1].timestamp;
-  return h1 > 0.0 && h2 > 0.0 && h1 <= options_.max_history_gap && h2 <= options_.max_history_gap &&
-         history_[0].position_constrained == history_[1].position_constrained;
-}
-
-Eigen::VectorXd Solver::WarmStart(double timestamp) const {
-  if (!options_.predict_motion || warm_start_given_ || !PredictionUsable(timestamp)) return theta_;
-  const SolvedFrame& a = history_[0];
-  const SolvedFrame& b = history_[1];
-  const double s = (timestamp - b.timestamp) / (b.timestamp - a.timestamp);
-  Eigen::VectorXd x = theta_;
-  x.head<3>() += s * (b.theta.head<3>() - a.theta.head<3>());
-  for (int b_idx = 0; b_idx < skeleton_.num_bones(); ++b_idx) {
-    const int i = Skeleton::RotationIndex(b_idx);
-    const Eigen::Matrix3d ra = Exp(a.theta.segment<3>(i)), rb = Exp(b.theta.segment<3>(i));
-    x.segment<3>(i) = Log(rb * Exp(s * Log(ra.transpose() * rb)));
-  }
-  return x;
-}
-
-void Solver::Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity) {
-  if (history_.size() == 2) history_.erase(history_.begin());
-  history_.push_back({frame.timestamp, theta_, position_constrained});
-
-  BodyPose pose;
-  ForwardKinematics(skeleton_, theta_.data(), &pose);
-  MotionState next;
-  next.timestamp = frame.timestamp;
-  next.accel = frame.accel_world;
-  next.velocity.assign(imus_.size(), std::nullopt);
-  for (const ImuSite& s : imus_) {
-    next.position.push_back(pose.position[s.bone] + pose.rotation[s.bone] * s.offset);
-  }
-  const bool reacquired = continuity == Continuity::kReacquired;
-  const double h2 = motion_ ? frame.timestamp - motion_->timestamp : 0.0;
-  if (continuity != Continuity::kRestarted && h2 > 0.0 && h2 <= options_.max_history_gap) {
-    next.step = h2;
-    // A re-acquisition jump is drift since the last keypoints (none: no velocity evidence).
-    const double gain = !reacquired ? options_.velocity_gain
-                        : last_fix_ ? h2 / (frame.timestamp - *last_fix_)
-                                    : 0.0;
-    for (size_t i = 0; i < imus_.size(); ++i) {
-      const Eigen::Vector3d raw = (next.position[i] - motion_->position[i]) / h2;
-      const std::optional<Eigen::Vector3d>& v = motion_->velocity[i];
-      if (!v) {
-        if (!reacquired) next.velocity[i] = raw;  // a jump is no velocity
-        continue;
-      }
-      Eigen::Vector3d predicted = *v;
-      if (motion_->accel[i]) predicted += *motion_->accel[i] * 0.5 * (motion_->step + h2);
-      next.velocity[i] = predicted + gain * (raw - predicted);
-    }
-  }
-  motion_ = std::move(next);
-  if (position_constrained) last_fix_ = frame.timestamp;
-}
-
-void Solver::TrackHeadings(const CleanFrame& frame) {
-  const double dt = last_heading_update_ ? std::min(frame.timestamp - *last_heading_update_,
-                                                    options_.max_history_gap)
-                                         : 0.0;
-  last_heading_update_ = frame.timestamp;
-  if (options_.heading_time_constant <= 0.0 || dt <= 0.0) return;
-  const double gain = std::min(1.0, dt / options_.heading_time_constant);
-  BodyPose pose;
-  ForwardKinematics(skeleton_, theta_.data(), &pose);
-  for (size_t i = 0; i < imus_.size(); ++i) {
-    if (!frame.imu_world[i]) continue;
-    // The world-frame turn from the measured sensor orientation to the solved one; its
-    // twist about z is the heading's error.
-    const Eigen::Quaterniond q(pose.rotation[imus_[i].bone] * imus_[i].mount *
-                               frame.imu_world[i]->transpose());
-    double yaw = 2.0 * std::atan2(q.z(), q.w());
-    if (yaw > M_PI) yaw -= 2.0 * M_PI;
-    if (yaw < -M_PI) yaw += 2.0 * M_PI;
-    if (options_.heading_baseline_s > 0.0) {
-      HeadingBaseline& b = heading_baselines_[i];
-      if (b.seconds < options_.heading_baseline_s) {  // still learning what "no drift" looks like
-        b.seconds += dt;
-        b.yaw_integral += yaw * dt;
-        continue;
-      }
-      yaw -= b.yaw_integral / b.seconds;
-    }
-    yaw = std::clamp(yaw, -options_.max_heading_step, options_.max_heading_step);
-    headings_[i] = std::remainder(headings_[i] + gain * yaw, 2.0 * M_PI);
-  }
-}
-
 void Solver::UpdatePriorResiduals() {
   if (!prior_) return;
   if (prior_->rank() < prior_->dof() && options_.pca_projection.weight != pca_projection_weight_) {
@@ -343,18 +245,6 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   if (problem.count(kAccelerationTerm) == 0) result->flags |= kAccelerationUnavailable;
   result->costs = problem.Costs();
   return true;
-}
-
-void Solver::TurnByHeadings(CleanFrame* clean) const {
-  for (size_t i = 0; i < imus_.size(); ++i) {
-    if (headings_[i] == 0.0 || !clean->imu_world[i]) continue;
-    const Eigen::Matrix3d turn = Eigen::AngleAxisd(headings_[i], Eigen::Vector3d::UnitZ()).matrix();
-    clean->imu_world[i] = turn * *clean->imu_world[i];
-    if (clean->accel_world[i]) {
-      const Eigen::Vector3d& g = options_.accel_at_rest;
-      clean->accel_world[i] = turn * (*clean->accel_world[i] + g) - g;
-    }
-  }
 }
 
 bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initialising,

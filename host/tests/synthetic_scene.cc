@@ -198,4 +198,22 @@ PosePrior RandomPrior(int dof, int rank, const Eigen::VectorXd& theta_mean, std:
   return p;
 }
 
+SolverOptions ExactOptions() {
+  SolverOptions o;
+  o.max_iterations = 50;
+  o.function_tolerance = 1e-14;
+  o.gradient_tolerance = 1e-14;
+  o.parameter_tolerance = 1e-12;
+  return o;
+}
+
+std::unique_ptr<Solver> MakeSolver(const Scene& scene, std::optional<PosePrior> prior,
+                                   SolverOptions options) {
+  std::string error;
+  auto solver =
+      Solver::Create(scene.skeleton, scene.rig, scene.layout, scene.imus, prior, options, &error);
+  EXPECT_NE(solver, nullptr) << error;
+  return solver;
+}
+
 }  // namespace mocap::testing

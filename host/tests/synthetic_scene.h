@@ -51,6 +51,14 @@ double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a,
 // Largest error of the layout's keypoint sites (metres): what the cameras observe.
 double MaxSiteError(const Scene& scene, const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 
+// Options that solve noise-free frames to the last digit (tight tolerances, 50 iterations).
+SolverOptions ExactOptions();
+
+// A solver of the scene's skeleton, rig, layout and IMUs (a test failure names what is wrong
+// when it cannot be made).
+std::unique_ptr<Solver> MakeSolver(const Scene& scene, std::optional<PosePrior> prior,
+                                   SolverOptions options = ExactOptions());
+
 // A noise-free prior for a test: zero cost at the last pose, whose non-root DOF are the
 // mean, and (almost) zero at the others, whose directions it spans with sigma = 1e3.
 // The data terms alone leave some DOF unobservable (spine twist split between two
