@@ -12,6 +12,7 @@ from mocap.calibration import window
 from mocap.eval import metrics
 from mocap.eval import simulated as evaluation
 from mocap.sim import demo_motion, imu
+from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
 
@@ -19,8 +20,8 @@ from mocap.sim import take as sim_take
 def drifting():
     skeleton, thetas, dt = demo_motion.load_motion(60.0, 20.0)
     config = sim_take.Config(imu=dataclasses.replace(imu.ImuErrors(), heading_drift_deg_per_sqrt_min=5.0))
-    t = sim_take.simulate_motion(skeleton, thetas, dt, config, np.random.default_rng(1))
-    return t, evaluation.estimate_calibration(t)
+    t, frames = sim_messages.delivered(sim_take.simulate_motion(skeleton, thetas, dt, config, np.random.default_rng(1)))
+    return t, evaluation.estimate_calibration(t, frames)
 
 
 def solve(t, c, options):

@@ -76,9 +76,9 @@ def test_imus_that_never_move_are_left_out_with_a_reason():
     det = np.zeros((len(t), 2, 17, 3))
     det[..., 2] = 1.0  # two cameras see every frame
     r = ImuReadings(["a", "b", "c"], [0, 1, 2], q)
-    start, score, why = informative.calibration_window(CalibrationInput.from_arrays(det, t, "coco17", r), 5.0)
+    start, score, why = informative.calibration_window(CalibrationInput(det, t, "coco17", r, np.ones(len(t), bool)), 5.0)
     assert start == 0 and score < informative.MIN_SCORE_DEG and "too still" in why
-    assert informative.calibration_window(CalibrationInput.from_arrays(det, t, "coco17", None), 5.0) == (0, None, None)
+    assert informative.calibration_window(CalibrationInput(det, t, "coco17", None, np.ones(len(t), bool)), 5.0) == (0, None, None)
 
 
 def test_the_live_watch_scores_the_last_seconds_of_samples():

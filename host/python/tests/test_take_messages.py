@@ -62,10 +62,14 @@ def test_an_invalid_acceleration_keeps_its_orientation_and_far_samples_are_left_
 
 
 def test_the_host_synchronises_them_into_the_takes_frames(take, tmp_path):
+    for people in take.people:  # frame 3: detection ran and found nobody, in every camera
+        people[3] = people[3][:0]
     session = messages.write_session(take, tmp_path / "session")
     synced = from_messages.synchronised(messages.messages(take), session, "take")
     assert synced.data.frames == take.n_frames and not synced.dropped
     assert np.allclose(synced.data.times, np.arange(take.n_frames) / take.frame_rate, atol=1e-9)
     assert synced.data.readings.names == [m.sensor for m in take.imus]
+    assert synced.data.detected.all() and not synced.data.detections[3, ..., 2].any()
+    assert synced.data.detections[4, ..., 2].any()
     # 100 Hz samples slerped to 60 Hz frames: each reading between its two samples' orientations
     assert np.isfinite(synced.data.readings.quaternions).all()

@@ -11,14 +11,17 @@ from mocap.eval import metrics
 from mocap.eval import simulated as evaluation
 from mocap.model.poses import calibration_poses
 from mocap.sim import demo_motion
+from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
 
 def pose_then_motion(pose: str = "T", seconds: float = 5.0):
-    """A take of the demo motion after 1 s of a T- or N-pose and a 0.5 s blend into the motion."""
+    """A take of the demo motion after 1 s of a T- or N-pose and a 0.5 s blend into the motion, as
+    the host's input path delivers it, and its frames."""
     skeleton, thetas, dt = demo_motion.load_motion(60.0, seconds)
     thetas = demo_motion.after_held_pose(thetas, calibration_poses(skeleton)[pose], dt)
-    return sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(), np.random.default_rng(2))
+    return sim_messages.delivered(sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(),
+                                                           np.random.default_rng(2)))
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +29,9 @@ def take():
     return pose_then_motion("T")
 
 
-def calibrated(t, use_held_pose: bool):
-    c = evaluation.estimate_calibration(t, use_held_pose=use_held_pose)
+def calibrated(delivered, use_held_pose: bool):
+    t, frames = delivered
+    c = evaluation.estimate_calibration(t, frames, use_held_pose=use_held_pose)
     solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
     errors = metrics.errors(t.skeleton, t.thetas, solved, 1 / 60, c.skeleton)
     mounts = [e["mount_deg"] for e in metrics.calibration_errors(t, c)["imus"].values()]
@@ -55,6 +59,7 @@ def test_an_n_pose_is_found_and_helps_too():
 
 
 def test_no_calibration_pose_is_found_in_motion(take):
+    take = take[0]
     skeleton = take.skeleton
     moving = take.thetas[120:360]  # the demo motion itself
     assert held_pose_frames(skeleton, moving, take.times[120:360])[0] is None
@@ -68,10 +73,11 @@ def test_keypoint_sites_are_estimated_where_the_window_observes_them():
     detector's systematic offsets); with the IMUs pinning the bones' orientations the window
     moves the sites towards where they really are, along the directions it observes."""
     skeleton, thetas, dt = demo_motion.load_motion(60.0, 6.0)
-    t = sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(), np.random.default_rng(4))
+    t, frames = sim_messages.delivered(sim_take.simulate_motion(skeleton, thetas, dt, sim_take.Config(),
+                                                                np.random.default_rng(4)))
     results = {}
     for std in (0.0, window.SITE_OBSERVABLE_STD):
-        c = evaluation.estimate_calibration(t, site_std=std)
+        c = evaluation.estimate_calibration(t, frames, site_std=std)
         solved, _ = evaluation.solve(t, evaluation.options_for([]), c)
         sites = metrics.calibration_errors(t, c)["sites"].values()
         results[std] = (c.report["site_directions_kept"],

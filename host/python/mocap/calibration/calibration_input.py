@@ -2,9 +2,8 @@
 the IMU readings at the same frames, and which frames the detector ran on.
 
 Built from the host's synchronised frames (`from_frames`: the frames mocapd would solve,
-through the C++ InputPath — calibration from a recording or the live streams), or from a
-simulated take's arrays (`mocap.eval`, the demo's studio, take folders) whose frames are
-already aligned.
+through the C++ InputPath), whatever the messages came from: a recording, the live streams,
+a take folder (mocap.takes.messages) or a simulated take (mocap.sim.messages).
 """
 
 from __future__ import annotations
@@ -46,13 +45,6 @@ class CalibrationInput:
         return dataclasses.replace(self, readings=None)
 
     @classmethod
-    def from_arrays(cls, detections: np.ndarray, times: np.ndarray, layout: str, readings: ImuReadings | None,
-                    detected: np.ndarray | None = None) -> CalibrationInput:
-        """Aligned arrays (detected: default every frame)."""
-        detected = np.ones(len(times), bool) if detected is None else np.asarray(detected, bool)
-        return cls(np.asarray(detections, float), np.asarray(times, float), layout, readings, detected)
-
-    @classmethod
     def from_frames(cls, frames: list, cameras: int, layout: str, keypoints: int,
                     imu_set: list[tuple[str, int]]) -> CalibrationInput | None:
         """The input of synchronised frames (_core.SyncedFrame, mocap.model.frames) of a rig of
@@ -65,7 +57,8 @@ class CalibrationInput:
         det = np.zeros((n, cameras, keypoints, 3))
         quats, accs = np.full((n, len(imu_set), 4), np.nan), np.full((n, len(imu_set), 3), np.nan)
         for f, frame in enumerate(frames):
-            det[f, frame.cameras] = frame.keypoints
+            if frame.cameras:  # none: nobody seen (the frame still counts, as detected or not)
+                det[f, frame.cameras] = frame.keypoints
             quats[f, frame.imus] = frame.quaternions_wxyz  # NaN where the synchroniser has no reading
             accs[f, frame.imus] = frame.accelerations
         times_ns = np.array([frame.time_ns for frame in frames], dtype=np.int64)

@@ -23,7 +23,7 @@ from mocap.eval import edge_detector
 from mocap.io import calib_toml
 from mocap.io.demo_data import TRIAL
 from mocap.io.trc import Trc, read_trc
-from mocap.model import studio
+from mocap.model import frames, studio
 from mocap.model.solver import Solver
 from mocap.sim import demo_motion
 
@@ -73,10 +73,10 @@ def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) 
     r = trc_axes(rig, trc, openpose)
     reference = trc.markers @ r.T  # (F, M, 3) calibration world
     solver = Solver(skeleton, rig, layout, [])
-    cams = list(range(len(rig.cameras)))
     solved = []
-    for f in range(keypoints.shape[1]):
-        result = solver.solve(f / RATE, cams, keypoints[:, f], [], np.zeros((0, 4)), np.zeros((0, 3)))
+    for frame in host_frames(rig, layout, keypoints):
+        result = solver.solve(frame.time_ns * 1e-9, list(frame.cameras), frame.keypoints, [], np.zeros((0, 4)),
+                              np.zeros((0, 3)))
         solved.append(studio.site_positions(skeleton, body.bones, body.offsets, result.theta))
     solved = np.array(solved)
     n = min(len(solved), len(reference))
@@ -85,6 +85,26 @@ def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) 
             "per_marker_cm": {m: 100 * float(np.nanmean(d[:, i])) for i, m in enumerate(trc.names)},
             "jitter_ours_ms2": jitter(solved[:n]), "jitter_pose2sim_ms2": jitter(reference[:n]),
             "trc_axes": r.astype(int).tolist()}
+
+
+def host_frames(rig: _core.Rig, layout: _core.KeypointLayout, keypoints: np.ndarray) -> list:
+    """The synchronised frames (_core.SyncedFrame) of keypoints (C, F, K, 3), sent as the
+    camera boxes send them (frame f captured and received at f / RATE, the tracked person,
+    none where it was not found) through the host's input path; RuntimeError when it did not
+    deliver every frame."""
+    messages = []
+    for f in range(keypoints.shape[1]):
+        time_ns = int(round(f * 1e9 / RATE))
+        for c, cam in enumerate(rig.cameras):
+            persons = [keypoints[c, f]] if (keypoints[c, f, :, 2] > 0).any() else []
+            msg = frames.camera_frame(cam, f, time_ns, layout.name, persons)
+            messages.append((time_ns, msg.DESCRIPTOR.full_name, msg.SerializeToString()))
+    path = _core.InputPath(rig, [], layout)
+    out = frames.synchronise(path, messages)
+    if len(out) != keypoints.shape[1] or path.dropped:
+        raise RuntimeError(f"the input path delivered {len(out)} of {keypoints.shape[1]} frames "
+                           f"(dropped: {dict(path.dropped)})")
+    return out
 
 
 def jitter(x: np.ndarray, rate: float = RATE) -> float:

@@ -1,7 +1,8 @@
 """The fused solver (or a baseline) on simulated takes of real motion: `mocap eval`. Each
-take is simulated (mocap.sim.take), calibrated from its own first seconds or given the
-truth's calibration (oracle), solved frame by frame, and scored (mocap.eval.metrics), with
-the per-frame solve time."""
+take is simulated (mocap.sim.take), sent through the host's input path as the studio's
+messages (mocap.sim.messages), calibrated from its own first seconds or given the truth's
+calibration (oracle), solved frame by frame, and scored (mocap.eval.metrics), with the
+per-frame solve time."""
 
 from __future__ import annotations
 
@@ -10,10 +11,10 @@ import numpy as np
 from mocap import _core
 from mocap.calibration import informative, window
 from mocap.calibration.calibration_input import CalibrationInput
-from mocap.calibration.readings import ImuReadings
 from mocap.eval import baselines
 from mocap.eval.metrics import calibration_errors, errors, floor_cm
 from mocap.model.solver import Solver, solver_options
+from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
 TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation"}
@@ -50,17 +51,15 @@ def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Ca
     return thetas, ms
 
 
-def estimate_calibration(t: sim_take.Take, **options) -> window.Calibration:
+def estimate_calibration(t: sim_take.Take, frames: list, **options) -> window.Calibration:
     """The take's calibration from its own seconds (mocap.calibration.window, with its keyword
-    options), chosen as `mocap solve --take` chooses them (informative.calibration_window):
-    nothing of the truth is used (the IMU readings' reference frames are treated as unknown
-    too). IMUs too still to calibrate are left out (the calibration has none)."""
-    cams, k = len(t.rig.cameras), len(t.layout)
-    det = np.array([kp if kp is not None else np.zeros((cams, k, 3)) for kp in t.keypoints])
-    readings = ImuReadings([s.name for s in t.imus], [s.bone for s in t.imus], t.quaternions, t.accelerations)
-    detected = np.array([kp is not None for kp in t.keypoints])  # HS: the detector runs on 2 of 8 frames
-    return informative.estimate(t.rig, CalibrationInput.from_arrays(det, t.times, t.layout.name, readings, detected),
-                                **options)[0]
+    options) of its synchronised frames (sim_messages.delivered), chosen as `mocap solve
+    --take` chooses them (informative.calibration_window): nothing of the truth is used (the
+    IMU readings' reference frames are treated as unknown too). IMUs too still to calibrate
+    are left out (the calibration has none)."""
+    data = CalibrationInput.from_frames(frames, len(t.rig.cameras), t.layout.name, len(t.layout),
+                                        [(s.name, s.bone) for s in t.imus])
+    return informative.estimate(t.rig, data, **options)[0]
 
 
 def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings: list[str] = (),
@@ -69,8 +68,8 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
     calibration: "oracle" (the true skeleton and IMU mounting) or "estimated" (fused solver
     only; calibration_options: keyword options of window.estimate)."""
     rng = np.random.default_rng(seed)
-    t = sim_take.simulate(clip, config, rng)
-    estimated = (estimate_calibration(t, **(calibration_options or {}))
+    t, frames = sim_messages.delivered(sim_take.simulate(clip, config, rng))
+    estimated = (estimate_calibration(t, frames, **(calibration_options or {}))
                  if calibration == "estimated" and baseline is None else None)
     if baseline == "imu-only":
         solved, ms = baselines.imu_only(t), np.zeros(len(t.thetas))

@@ -12,6 +12,7 @@ import numpy as np
 from mocap.eval import metrics
 from mocap.eval import simulated as evaluation
 from mocap.sim import demo_motion, imu
+from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
 DRIFTS = (0.5, 5.0)  # deg/sqrt(min)
@@ -27,8 +28,9 @@ def rows(seconds: float = 60.0, seed: int = 1) -> list[dict]:
     out = []
     for drift in DRIFTS:
         config = sim_take.Config(imu=dataclasses.replace(imu.ImuErrors(), heading_drift_deg_per_sqrt_min=drift))
-        t = sim_take.simulate_motion(skeleton, thetas, dt, config, np.random.default_rng(seed))
-        estimated = evaluation.estimate_calibration(t)
+        t, frames = sim_messages.delivered(sim_take.simulate_motion(skeleton, thetas, dt, config,
+                                                                    np.random.default_rng(seed)))
+        estimated = evaluation.estimate_calibration(t, frames)
         for calibration, tau, baseline in RUNS:
             c = estimated if calibration == "estimated" else None
             headings: list = []

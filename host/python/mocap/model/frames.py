@@ -11,8 +11,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
+import numpy as np
+
 from mocap import _core
 from mocap.errors import InputError
+from mocap.net import wire
 
 INPUT_TYPES = ("mocap.v1.KeypointFrame", "mocap.v1.ImuBatch")
 
@@ -38,3 +41,15 @@ def synchronise(path: _core.InputPath, messages: Iterable[tuple[int, str, bytes]
         path.feed(type_name, payload, arrival_ns)
         frames += path.take_ready(arrival_ns)
     return frames + path.flush()
+
+
+def camera_frame(camera: _core.Camera, index: int, time_ns: int, layout: str,
+                 persons: Iterable[np.ndarray] | None) -> wire.KeypointFrame:
+    """The KeypointFrame a camera box sends for frame `index` captured (and sent) at time_ns:
+    persons (K, 3) x, y (px), confidence, or None when the detector did not run on it (HS)."""
+    msg = wire.KeypointFrame(camera_id=camera.name, frame_index=index, capture_time_ns=time_ns,
+                             image_width=camera.width, image_height=camera.height, keypoint_layout=layout,
+                             detected=persons is not None, send_time_ns=time_ns)
+    for p in persons or []:
+        msg.persons.add(x=p[:, 0].tolist(), y=p[:, 1].tolist(), confidence=p[:, 2].tolist(), score=1.0)
+    return msg

@@ -22,6 +22,7 @@ import numpy as np
 from mocap import _core, paths
 from mocap.io.session import Session, SyncSettings
 from mocap.io.take_folder import TakeFolder
+from mocap.model import frames
 from mocap.model.solver import imu_set_json
 from mocap.net import wire
 
@@ -51,14 +52,9 @@ def messages(take: TakeFolder) -> list[tuple[int, str, bytes]]:
 
 def _camera_frames(take: TakeFolder):
     times = frame_time_ns(take, np.arange(take.n_frames))
-    for camera, frames in zip(take.rig.cameras, take.people):
-        for f, persons in enumerate(frames):
-            msg = wire.KeypointFrame(camera_id=camera.name, frame_index=f, capture_time_ns=int(times[f]),
-                                     image_width=camera.width, image_height=camera.height,
-                                     keypoint_layout=take.layout, detected=True, send_time_ns=int(times[f]))
-            for p in persons:
-                msg.persons.add(x=p[:, 0].tolist(), y=p[:, 1].tolist(), confidence=p[:, 2].tolist(), score=1.0)
-            yield int(times[f]), msg
+    for camera, people in zip(take.rig.cameras, take.people):
+        for f, persons in enumerate(people):
+            yield int(times[f]), frames.camera_frame(camera, f, int(times[f]), take.layout, list(persons))
 
 
 def _imu_batches(take: TakeFolder):
