@@ -1,0 +1,143 @@
+"""The hub's work between the CAN bus and the publisher, without either: each frame decoded
+and checked, nodes discovered from their heartbeats, each node's clock fitted from the Syncs
+the hub sent and the SyncReports it got back, samples paired and timed on the hub's clock,
+and handed over as one ImuBatch per batch period. Every bad frame is counted and dropped.
+
+hub.toml names the nodes (node id -> the session's sensor name); a node that is not named
+there is discovered and reported, and its samples are dropped (counted `unnamed`): the host
+would not know what body segment they measure.
+"""
+
+from __future__ import annotations
+
+import collections
+import dataclasses
+import tomllib
+from pathlib import Path
+
+from mocap.net import wire
+from mocap_edge.errors import EdgeError
+from mocap_edge.hub.can_db import CanFrameError, Database
+from mocap_edge.hub.node import Node, Sample
+
+STATUS_ORIENTATION_INVALID = wire.ImuSample.STATUS_ORIENTATION_INVALID
+STATUS_ACCELERATION_CLIPPED = wire.ImuSample.STATUS_ACCELERATION_CLIPPED
+
+
+@dataclasses.dataclass
+class HubConfig:
+    """hub.toml: [hub] id, rate_hz, acc_range_g, gyro_range_dps, mode ("6d" or "9d"),
+    sync_hz, batch_ms, stale_s; [nodes] <node id> = "<sensor name>"."""
+    names: dict[int, str]
+    hub_id: str = "hub0"
+    rate_hz: int = 60
+    acc_range_g: int = 16
+    gyro_range_dps: int = 2000
+    mode: str = "6d"
+    sync_hz: float = 50.0
+    batch_ms: float = 10.0
+    stale_s: float = 1.0  # a node silent this long is reported stale
+
+    @classmethod
+    def load(cls, path: Path) -> HubConfig:
+        try:
+            data = tomllib.loads(Path(path).read_text())
+        except (OSError, tomllib.TOMLDecodeError) as e:
+            raise EdgeError(f"{path}: {e}") from None
+        hub, nodes = data.get("hub", {}), data.get("nodes", {})
+        known = {f.name for f in dataclasses.fields(cls)} - {"names"} | {"id"}
+        unknown = sorted(set(hub) - known) + sorted(set(data) - {"hub", "nodes"})
+        if unknown:
+            raise EdgeError(f"{path}: unknown key {unknown[0]!r}")
+        try:
+            names = {int(k): str(v) for k, v in nodes.items()}
+        except ValueError:
+            raise EdgeError(f"{path}: [nodes] keys are node ids 1..63") from None
+        if any(not 1 <= k <= 63 for k in names) or len(set(names.values())) != len(names):
+            raise EdgeError(f"{path}: [nodes]: node ids 1..63, each sensor name once")
+        settings = {("hub_id" if k == "id" else k): v for k, v in hub.items()}
+        return cls(names, **settings)
+
+
+class Hub:
+    def __init__(self, config: HubConfig, db: Database | None = None):
+        self.config, self.db = config, db or Database()
+        self.nodes: dict[int, Node] = {}
+        self.dropped: collections.Counter[str] = collections.Counter()
+        self._syncs: dict[int, int] = {}  # sync_seq -> the hub's transmit time
+        self._pending: list[wire.ImuSample] = []
+        self._sequence = 0
+
+    def sync_sent(self, sequence: int, tx_ns: int) -> None:
+        """A Sync left at tx_ns (the hub's clock: the frame's transmit timestamp)."""
+        self._syncs[sequence % 256] = tx_ns
+
+    def on_frame(self, arrival_ns: int, frame_id: int, data: bytes, extended: bool = False,
+                 remote: bool = False) -> bool:
+        """One frame received at arrival_ns; False when it was dropped (counted by reason)."""
+        try:
+            frame = self.db.decode(frame_id, data, extended, remote)
+        except CanFrameError as e:
+            self.dropped[e.reason] += 1
+            return False
+        node = self.nodes.get(frame.node)
+        if node is None:
+            node = self.nodes[frame.node] = Node(frame.node, self.config.names.get(frame.node, ""))
+        handler = getattr(self, f"_on_{frame.name}")
+        return handler(node, frame.signals, arrival_ns)
+
+    def take_batch(self, now_ns: int) -> wire.ImuBatch | None:
+        """The samples timed since the last batch, as one ImuBatch sent at now_ns (None: none)."""
+        if not self._pending:
+            return None
+        batch = wire.ImuBatch(hub_id=self.config.hub_id, sequence=self._sequence, send_time_ns=now_ns)
+        batch.samples.extend(self._pending)
+        self._pending, self._sequence = [], self._sequence + 1
+        return batch
+
+    def stale(self, now_ns: int) -> list[Node]:
+        """Named nodes silent for stale_s (never heard: stale from the start)."""
+        limit = int(self.config.stale_s * 1e9)
+        heard = {n.id: n.last_heard_ns for n in self.nodes.values()}
+        return [self.nodes.get(i) or Node(i, name) for i, name in self.config.names.items()
+                if heard.get(i) is None or now_ns - heard[i] > limit]
+
+    def _on_Heartbeat(self, node: Node, signals: dict, arrival_ns: int) -> bool:
+        node.on_heartbeat(signals, arrival_ns)
+        return True
+
+    def _on_SyncReport(self, node: Node, signals: dict, arrival_ns: int) -> bool:
+        tx = self._syncs.get(int(signals["sync_seq"]))
+        if tx is None or arrival_ns - tx > 1_000_000_000:  # not a Sync of ours, or one from long ago
+            self.dropped["sync_unknown"] += 1
+            return False
+        node.on_sync_report(tx, int(signals["rx_time_us"]), arrival_ns)
+        return True
+
+    def _on_ImuQuat(self, node: Node, signals: dict, arrival_ns: int) -> bool:
+        node.on_quat(signals, arrival_ns)
+        return True
+
+    def _on_ImuAccel(self, node: Node, signals: dict, arrival_ns: int) -> bool:
+        sample = node.on_accel(signals, arrival_ns)
+        if sample is None:
+            return False
+        if not node.name:
+            self.dropped["unnamed"] += 1
+            return False
+        self._pending.append(_wire_sample(node.name, sample))
+        return True
+
+    def _on_CommandReply(self, node: Node, signals: dict, arrival_ns: int) -> bool:
+        node.last_heard_ns = arrival_ns
+        node.reply = signals
+        return True
+
+
+def _wire_sample(name: str, s: Sample) -> wire.ImuSample:
+    status = (STATUS_ORIENTATION_INVALID if s.orientation_invalid else 0) | \
+        (STATUS_ACCELERATION_CLIPPED if s.acc_clipped else 0)
+    w, x, y, z = s.quaternion
+    ax, ay, az = s.acceleration
+    return wire.ImuSample(sensor_id=name, sample_time_ns=s.time_ns, qw=w, qx=x, qy=y, qz=z, ax=ax, ay=ay, az=az,
+                          status=status, packet_counter=s.counter % 65536)

@@ -1,0 +1,92 @@
+"""A sensor node's side of the CAN protocol in software, for the hub's tests and the simulated
+studio: its own timer (sim_clock.NodeOscillator: offset, rate error, random walk), the
+SyncReport it answers each Sync with (the Sync's arrival on that timer), its heartbeats,
+its replies to commands, and its samples quantised as the CAN database quantises them.
+The frames are those the firmware sends (proto/can/README.md); `true_ns` is the instant on
+the hub's clock at which the node does a thing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mocap_edge.hub.can_db import COMMANDS, Database
+from mocap_edge.hub.clock_fit import WRAP_US
+from mocap_edge.hub.node import LOW_BITS, SEQ
+from mocap_edge.hub.sim_clock import NodeOscillator
+
+Q_MAX = 8191 / 8192  # the largest quaternion component the 14-bit signals carry
+A_MAX = 255.984375  # m/s², the 15-bit signals' largest
+STATE_CODES = {"boot": 0, "idle": 1, "running": 2, "fault": 3}
+
+
+class SimulatedNode:
+    def __init__(self, node_id: int, oscillator: NodeOscillator, rate_hz: int = 60, db: Database | None = None,
+                 running: bool = True):
+        self.id, self.osc, self.db = node_id, oscillator, db or Database()
+        self.rate_hz, self.running, self.state = rate_hz, running, "running" if running else "idle"
+        self.acc_range_g, self.gyro_range_dps, self.mode = 16, 2000, 0
+        self.seq = 0
+        self.synced_at_ns: int | None = None
+
+    def on_frame(self, frame_id: int, data: bytes, true_ns: int) -> list[tuple[int, bytes]]:
+        """The frames the node answers a frame from the hub with (received at true_ns)."""
+        if frame_id == self.db.sync(0)[0]:
+            self.synced_at_ns = true_ns
+            rx_us = int(np.floor(self.osc.advance(true_ns))) % WRAP_US
+            return [self.db.encode("SyncReport", self.id, sync_seq=data[0], rx_time_us=rx_us)]
+        if frame_id == self.db.command(self.id, "start")[0]:
+            return [self._command(data)]
+        return []
+
+    def sample(self, true_ns: int, quaternion, acceleration, orientation_invalid: bool = False) -> list[tuple[int, bytes]]:
+        """An ImuQuat and its ImuAccel for a sample taken at true_ns (quaternion w, x, y, z)."""
+        q = np.asarray(quaternion, float)
+        q = (q if q[0] >= 0 else -q) / np.linalg.norm(q)  # q and -q are one rotation: w >= 0 is sent
+        a = np.asarray(acceleration, float)
+        node_us = int(np.floor(self.osc.advance(true_ns)))
+        quat = self.db.encode("ImuQuat", self.id, **dict(zip(("q_w", "q_x", "q_y", "q_z"),
+                                                               np.clip(q, -1.0, Q_MAX))), seq=self.seq)
+        accel = self.db.encode("ImuAccel", self.id, **dict(zip(("a_x", "a_y", "a_z"), np.clip(a, -256.0, A_MAX))),
+                               orientation_invalid=int(orientation_invalid), acc_clipped=int(np.abs(a).max() > A_MAX),
+                               mag_disturbed=0, sample_time_us=node_us % LOW_BITS)
+        self.seq = (self.seq + 1) % SEQ
+        return [quat, accel]
+
+    def heartbeat(self, true_ns: int) -> tuple[int, bytes]:
+        synced = self.synced_at_ns is not None and true_ns - self.synced_at_ns < 2_000_000_000
+        flags = dict.fromkeys(("imu_nack", "mag_nack", "fifo_overflow", "imu_stuck", "mag_stuck", "command_refused",
+                               "frame_malformed", "self_test_failed", "acc_clipped", "mag_disturbed",
+                               "tx_overflow"), 0)
+        return self.db.encode("Heartbeat", self.id, state=STATE_CODES[self.state], mode=self.mode, synced=int(synced),
+                              chip=1, rate_hz=self.rate_hz, fw_version_major=1, fw_version_minor=0, error_count=0,
+                              **flags)
+
+    def reboot(self, oscillator: NodeOscillator) -> None:
+        """The node restarts: a new timer, its counter from 0, boot state until it runs again."""
+        self.osc, self.seq, self.state, self.synced_at_ns = oscillator, 0, "boot", None
+
+    def _command(self, data: bytes) -> tuple[int, bytes]:
+        code = data[0]
+        result = 0
+        if code == COMMANDS["start"]:
+            self.running, self.state = True, "running"
+        elif code == COMMANDS["stop"]:
+            self.running, self.state = False, "idle"
+        elif code == COMMANDS["set_rate"]:
+            rate = int.from_bytes(data[1:3], "little")
+            result = 4 if self.running else 3 if not 1 <= rate <= 400 else 0
+            self.rate_hz = rate if result == 0 else self.rate_hz
+        elif code == COMMANDS["set_ranges"]:
+            acc, gyro = data[1], int.from_bytes(data[2:4], "little")
+            result = 4 if self.running else 3 if acc not in (2, 4, 8, 16) or gyro not in (250, 500, 1000, 2000) else 0
+            if result == 0:
+                self.acc_range_g, self.gyro_range_dps = acc, gyro
+        elif code == COMMANDS["set_mode"]:
+            result = 3 if data[1] > 1 else 0
+            self.mode = data[1] if result == 0 else self.mode
+        else:
+            result = 1
+        return self.db.encode("CommandReply", self.id, command=code, result=result, rate_hz=self.rate_hz,
+                              acc_range_g=self.acc_range_g, gyro_range_dps=self.gyro_range_dps, mode=self.mode,
+                              running=int(self.running))
