@@ -2,19 +2,26 @@
        [--realtime] [--trigger CHIP:LINE --exposure-mid-us US]
    python -m mocap_edge camera --source sim:STREAMS --camera ID --bind ENDPOINT --start-ns T [--seed S]
        [--stop FROM_S TO_S]                                            (a box of the simulated studio)
-   python -m mocap_edge imu-hub --streams STREAMS --bind ENDPOINT --start-ns T      (its IMU hub)"""
+   python -m mocap_edge imu-hub --can URI --config hub.toml --bind ENDPOINT [--duration S]
+                                                   (the IMU hub: sensor nodes on a CAN bus)
+   python -m mocap_edge imu-hub --streams STREAMS --bind ENDPOINT --start-ns T
+                                                   (the simulated studio's IMUs, replayed from its stream file)"""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
 import math
+import signal
 import sys
 import time
 
 from mocap_edge import camera_box, imu_hub, pacing
 from mocap_edge.detect.base import Detector, open_detector
 from mocap_edge.errors import EdgeError, TriggerError
+from mocap_edge.hub.can_bus import open_bus
+from mocap_edge.hub.hub import Hub, HubConfig
+from mocap_edge.hub.service import HubService, publisher
 from mocap_edge.sources.base import open_source
 from mocap_edge.streams import Streams
 from mocap_edge.trigger import GpiodTrigger, TriggerPairing
@@ -24,7 +31,8 @@ Span = tuple[float, float]  # from_s, to_s of the take
 
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap_edge", description="an edge box: a camera box (a real camera, a "
-                                "video, or a camera of the simulated studio) or the simulated studio's IMU hub")
+                                "video, or a camera of the simulated studio) or an IMU hub (sensor nodes on CAN, "
+                                "or the simulated studio's IMUs replayed)")
     p.add_argument("role", choices=["camera", "imu-hub"])
     p.add_argument("--source", help="role camera: the frame source, e.g. libcamera:0, v4l2:/dev/video0, "
                    "video:cam01.mp4, images:DIR (with --fps), fake:, sim:STREAMS (a camera of the simulated studio)")
@@ -38,6 +46,10 @@ def parser() -> argparse.ArgumentParser:
                    "(e.g. /dev/gpiochip0:17; docs/sync.md)")
     p.add_argument("--exposure-mid-us", type=float, default=0.0,
                    help="with --trigger: trigger edge to mid-exposure (sensor delay + exposure / 2), microseconds")
+    p.add_argument("--can", help="role imu-hub: the sensor nodes' CAN bus: socketcan:can0, slcan:socket://HOST:PORT, "
+                   "slcan:/dev/ttyACM0 or virtual:NAME")
+    p.add_argument("--config", help="role imu-hub with --can: hub.toml (node ids -> sensor names, rate, ranges)")
+    p.add_argument("--duration", type=float, default=0.0, help="role imu-hub with --can: stop after this many s")
     p.add_argument("--streams", help="role imu-hub: stream file of the simulated studio (.npz, mocap_edge.streams)")
     p.add_argument("--bind", required=True, help="ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
     p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now): "
@@ -58,8 +70,10 @@ def main(argv: list[str] | None = None) -> int:
         a.start_ns = time.time_ns()
     if a.role == "camera" and not a.source:
         p.error("role camera needs --source (sim:STREAMS for a camera of the simulated studio)")
-    if a.role == "imu-hub" and not a.streams:
-        p.error("role imu-hub needs --streams (the simulated studio's stream file)")
+    if a.role == "imu-hub" and bool(a.can) == bool(a.streams):
+        p.error("role imu-hub needs --can URI (with --config hub.toml) or --streams (a stream file to replay)")
+    if a.can and not a.config:
+        p.error("--can needs --config hub.toml (which node is which sensor)")
     try:
         return _camera(a) if a.role == "camera" else _imu_hub(a)
     except EdgeError as e:
@@ -68,9 +82,30 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _imu_hub(a: argparse.Namespace) -> int:
+    if a.can:
+        return _can_hub(a)
     stop = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
     n = imu_hub.run(Streams.load(a.streams), a.bind, a.start_ns, stop_sensor=stop)
     print(f"imu hub: {n} batches sent", file=sys.stderr)
+    return 0
+
+
+def _can_hub(a: argparse.Namespace) -> int:
+    """The hub on a CAN bus until SIGINT/SIGTERM (or --duration)."""
+    config = HubConfig.load(a.config)
+    port = open_bus(a.can)
+    publish, socket = publisher(a.bind)
+    stopping = []
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stopping.append(True))
+    try:
+        service = HubService(port, Hub(config), publish)
+        n = service.run(lambda: bool(stopping), a.duration)
+    finally:
+        port.bus.shutdown()
+        socket.close()
+    print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "
+          f"bus errors {dict(service.bus_errors)}", file=sys.stderr)
     return 0
 
 

@@ -145,3 +145,105 @@ def test_hub_toml_is_checked(tmp_path):
         path.write_text(text)
         with pytest.raises(EdgeError, match=what):
             HubConfig.load(path)
+
+
+def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
+    """Real time, python-can's virtual bus: the hub's service sends Syncs and the configuration,
+    simulated nodes (started idle) answer, and ImuBatches come out with every named node's
+    samples on the hub's clock."""
+    import time
+
+    from mocap_edge.hub.can_bus import open_bus
+    from mocap_edge.hub.service import HubService
+    from mocap_edge.hub.sim_runner import NodeRunner
+
+    hub_port, nodes_port = open_bus("virtual:test_hub_live"), open_bus("virtual:test_hub_live")
+    start = time.time_ns()
+    nodes = make_nodes(list(NAMES) + [40], np.random.default_rng(2), rate_hz=30, origin_ns=start)
+    for node in nodes.values():
+        node.running, node.state = False, "idle"
+    runner = NodeRunner(nodes_port.bus, nodes, turning)
+    batches = []
+    config = HubConfig(dict(NAMES), rate_hz=60, sync_hz=50)
+    service = HubService(hub_port, Hub(config), batches.append)
+    runner.start()
+    try:
+        service.run(lambda: False, duration_s=2.5)
+    finally:
+        runner.stop()
+        hub_port.bus.shutdown()
+        nodes_port.bus.shutdown()
+    assert all(nodes[i].running and nodes[i].rate_hz == 60 for i in NAMES) and not nodes[40].running
+    got = [s for b in batches for s in b.samples]
+    assert {s.sensor_id for s in got} == set(NAMES.values())
+    assert 40 in service.hub.nodes and service.hub.nodes[40].heartbeat  # discovered; not in hub.toml: not started
+    for name in NAMES.values():
+        times = np.array([s.sample_time_ns for s in got if s.sensor_id == name])
+        assert len(times) > 60 and np.all(np.diff(times) > 0)
+        # a sample reaches the hub after it was taken: its time lies before its batch left
+        sent = {s.sample_time_ns: b.send_time_ns for b in batches for s in b.samples if s.sensor_id == name}
+        assert all(0 < sent[t] - t < 200_000_000 for t in times)
+        # the nodes sample on a grid from the runner's start: the hub's times land on it (to 2 ms:
+        # this machine's thread scheduling delays the Syncs' receive stamps)
+        period = 1e9 / 60
+        off = (times[len(times) // 2:] - runner.start_ns) % period
+        assert np.minimum(off, period - off).max() < 2e6
+
+
+def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
+    """python-can raises CanOperationError when the controller is bus-off (SocketCAN: ENETDOWN
+    / ENOBUFS) and hands error frames over as messages; the virtual bus makes neither."""
+    import can
+
+    from mocap_edge.hub.can_bus import CanPort
+    from mocap_edge.hub.service import HubService
+
+    class FailingBus(can.BusABC):
+        def __init__(self):
+            super().__init__(channel="failing")
+            self.sends, self.clock = 0, 0
+
+        def send(self, msg, timeout=None):
+            self.sends += 1
+            if 3 <= self.sends < 8:
+                raise can.CanOperationError("Transmit failed: bus off")
+
+        def _recv_internal(self, timeout):
+            return can.Message(is_error_frame=True, timestamp=1.0), False
+
+    clock = iter(range(0, 10**10, 5_000_000))  # 5 ms per reading
+    service = HubService(CanPort(FailingBus(), echoes=False), Hub(HubConfig(dict(NAMES), sync_hz=100)),
+                         lambda batch: None, clock_ns=lambda: next(clock))
+    service.run(lambda: False, duration_s=0.2)
+    assert service.bus_errors["bus_off"] == 5 and service.bus_errors["error_frames"] > 10
+    assert service.port.bus.sends > 8  # it kept sending Syncs after the bus came back
+
+
+def test_the_hub_command_runs_until_told_to_stop(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    (tmp_path / "hub.toml").write_text('[hub]\nrate_hz = 60\n\n[nodes]\n3 = "pelvis"\n')
+    endpoint = f"tcp://127.0.0.1:{free_port()}"
+    process = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can", "virtual:cli", "--config",
+                                str(tmp_path / "hub.toml"), "--bind", endpoint], stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(1.5)
+        process.send_signal(signal.SIGTERM)
+        _, err = process.communicate(timeout=10)
+    finally:
+        process.kill()
+    assert process.returncode == 0 and "batches sent" in err and "Traceback" not in err, err
+    bad = subprocess.run([sys.executable, "-m", "mocap_edge", "imu-hub", "--can", "virtual:cli", "--config",
+                          str(tmp_path / "none.toml"), "--bind", endpoint], capture_output=True, text=True)
+    assert bad.returncode == 1 and "none.toml" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]

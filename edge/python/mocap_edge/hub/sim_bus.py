@@ -34,9 +34,11 @@ class BusConditions:
 
 
 def make_nodes(ids: list[int], rng: np.random.Generator, rate_hz: int = 60,
-               conditions: BusConditions = BusConditions()) -> dict[int, SimulatedNode]:
+               conditions: BusConditions = BusConditions(), origin_ns: int = 0) -> dict[int, SimulatedNode]:
+    """Nodes with clocks off by up to ±conditions.ppm, timers started anywhere, at origin_ns."""
     return {i: SimulatedNode(i, NodeOscillator(rng.uniform(-conditions.ppm, conditions.ppm), rng.uniform(0, WRAP_US),
-                                               conditions.walk_ppm_per_sqrt_s, rng), rate_hz) for i in ids}
+                                               conditions.walk_ppm_per_sqrt_s, rng, origin_ns), rate_hz)
+            for i in ids}
 
 
 class SimulatedBus:

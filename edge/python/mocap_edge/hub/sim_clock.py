@@ -10,19 +10,21 @@ from mocap_edge.hub.clock_fit import WRAP_US, NodeClock
 
 
 class NodeOscillator:
-    """node_us(true hub ns): the node's timer, started at start_us when the hub's clock read 0,
+    """node_us(true hub ns): the node's timer, started at start_us when the hub's clock read origin_ns,
     its rate error `ppm` wandering as a random walk. A pure function of time (the walk is drawn
     on a 10 ms grid as far as it is asked for), so the order of the queries does not matter."""
 
     STEP_NS = 10_000_000
 
-    def __init__(self, ppm: float, start_us: float, walk_ppm_per_sqrt_s: float, rng: np.random.Generator):
-        self.rng, self.walk = rng, walk_ppm_per_sqrt_s
+    def __init__(self, ppm: float, start_us: float, walk_ppm_per_sqrt_s: float, rng: np.random.Generator,
+                 origin_ns: int = 0):
+        self.rng, self.walk, self.origin_ns = rng, walk_ppm_per_sqrt_s, origin_ns
         self._ppm = [ppm]
         self._node_us = [start_us]  # at grid points k * STEP_NS
 
     def advance(self, t_ns: int) -> float:
-        """The node's timer (unwrapped, µs) at hub time t_ns >= 0."""
+        """The node's timer (unwrapped, µs) at hub time t_ns >= origin_ns."""
+        t_ns -= self.origin_ns
         k = int(t_ns // self.STEP_NS)
         while len(self._node_us) <= k + 1:
             step_s = self.STEP_NS * 1e-9

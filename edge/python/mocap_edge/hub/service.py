@@ -1,0 +1,106 @@
+"""The hub running: Syncs sent on the bus at sync_hz, every received frame fed to the hub's core
+(mocap_edge.hub.hub) with its receive timestamp, each node configured when it is discovered
+(stop, rate, ranges, mode, start, as hub.toml says), and an ImuBatch published every batch
+period. Bus errors (an error frame, a send refused: bus-off, a full queue) are counted and the
+loop goes on: python-can raises them, the kernel (SocketCAN's restart-ms) or the adapter
+recovers the bus.
+"""
+
+from __future__ import annotations
+
+import collections
+import time
+
+import can
+import zmq
+
+from mocap.net import transport, wire
+from mocap_edge.hub.can_bus import CanPort
+from mocap_edge.hub.hub import Hub
+
+SYNC_ID = 0x080
+
+
+class HubService:
+    def __init__(self, port: CanPort, hub: Hub, publish, clock_ns=time.time_ns):
+        """publish(ImuBatch) sends a batch; clock_ns is the hub's clock (the shared timebase)."""
+        self.port, self.hub, self.publish, self.clock_ns = port, hub, publish, clock_ns
+        self.bus_errors: collections.Counter[str] = collections.Counter()
+        self.configured: dict[int, int] = {}  # node id -> its restarts when it was configured
+        self._sync_seq = 0
+        self._sent_syncs: collections.deque[int] = collections.deque(maxlen=16)  # sequences awaiting their echo
+
+    def run(self, stop, duration_s: float = 0.0) -> int:
+        """Runs until stop() is true (or duration_s passed, if > 0); returns batches published."""
+        c = self.hub.config
+        sync_ns, batch_ns = int(1e9 / c.sync_hz), int(c.batch_ms * 1e6)
+        start = now = self.clock_ns()
+        next_sync, next_batch, published = now, now + batch_ns, 0
+        while not stop() and not (duration_s > 0 and now - start >= duration_s * 1e9):
+            if now >= next_sync:
+                self._send_sync()
+                next_sync += sync_ns
+            message = self.port.bus.recv(timeout=max(0.0, min(next_sync, next_batch) - self.clock_ns()) * 1e-9)
+            if message is not None:
+                self._receive(message)
+            now = self.clock_ns()
+            if now >= next_batch:
+                batch = self.hub.take_batch(now)
+                if batch is not None:
+                    self.publish(batch)
+                    published += 1
+                next_batch += batch_ns
+                self._configure_new_nodes()
+        return published
+
+    def _send(self, frame_id: int, data: bytes) -> bool:
+        try:
+            self.port.bus.send(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False), timeout=0.01)
+            return True
+        except can.CanOperationError as e:
+            self.bus_errors["send_refused"] += 1
+            self.bus_errors["bus_off" if "off" in str(e).lower() else "send_failed"] += 1
+            return False
+
+    def _send_sync(self) -> None:
+        seq = self._sync_seq
+        self._sync_seq = (self._sync_seq + 1) % 256
+        if not self._send(*self.hub.db.sync(seq)):
+            return
+        if self.port.echoes:
+            self._sent_syncs.append(seq)  # its transmit time comes with its echo
+        else:
+            self.hub.sync_sent(seq, self.clock_ns())
+
+    def _receive(self, message: can.Message) -> None:
+        if message.is_error_frame:
+            self.bus_errors["error_frames"] += 1
+            return
+        stamp = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
+        if not message.is_rx:  # our own frame, echoed: a Sync's echo is its transmit time
+            if message.arbitration_id == SYNC_ID and self._sent_syncs:
+                self.hub.sync_sent(self._sent_syncs.popleft(), stamp)
+            return
+        self.hub.on_frame(stamp, message.arbitration_id, bytes(message.data), message.is_extended_id,
+                          message.is_remote_frame)
+
+    def _configure_new_nodes(self) -> None:
+        """Each named node heard for the first time (or after a reboot) gets the hub's
+        configuration: stop, rate, ranges, mode, start."""
+        c = self.hub.config
+        for node in self.hub.nodes.values():
+            if not node.name or node.heartbeat is None:
+                continue
+            if self.configured.get(node.id) == node.counts.restarts:
+                continue
+            for command, args in (("stop", {}), ("set_rate", {"rate_hz": c.rate_hz}),
+                                  ("set_ranges", {"acc_range_g": c.acc_range_g, "gyro_range_dps": c.gyro_range_dps}),
+                                  ("set_mode", {"mode": 1 if c.mode == "9d" else 0}), ("start", {})):
+                self._send(*self.hub.db.command(node.id, command, **args))
+            self.configured[node.id] = node.counts.restarts
+
+
+def publisher(endpoint: str):
+    """A publish(ImuBatch) function on a ZeroMQ PUB socket bound at endpoint, and the socket."""
+    socket = transport.publisher(zmq.Context.instance(), endpoint)
+    return lambda batch: socket.send_multipart(wire.encode(batch)), socket

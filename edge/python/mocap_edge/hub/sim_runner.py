@@ -1,0 +1,60 @@
+"""Simulated sensor nodes on a real python-can bus, in real time (a thread): each answers the
+hub's Syncs and Commands, sends a heartbeat every second and, while running, its samples at
+its rate — what the firmware's nodes do, for the hub's end-to-end tests and the simulated
+studio (`virtual:` buses are in-process: the runner and the hub share the process)."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import can
+import numpy as np
+
+from mocap_edge.hub.sim_bus import Motion
+from mocap_edge.hub.sim_node import SimulatedNode
+
+
+class NodeRunner(threading.Thread):
+    def __init__(self, bus: can.BusABC, nodes: dict[int, SimulatedNode], motion: Motion, clock_ns=time.time_ns):
+        super().__init__(daemon=True, name="sim-nodes")
+        self.bus, self.nodes, self.motion, self.clock_ns = bus, nodes, motion, clock_ns
+        self.stopping = threading.Event()
+        self.start_ns = clock_ns()
+        self._next_sample = {i: self.start_ns for i in nodes}
+        self._next_heartbeat = self.start_ns
+
+    def run(self) -> None:
+        while not self.stopping.is_set():
+            message = self.bus.recv(timeout=0.001)
+            now = self.clock_ns()
+            if message is not None and message.is_rx and not message.is_error_frame:
+                for node in self.nodes.values():
+                    for frame in node.on_frame(message.arbitration_id, bytes(message.data), now):
+                        self._send(frame)
+            self._samples(now)
+            if now >= self._next_heartbeat:
+                for node in self.nodes.values():
+                    self._send(node.heartbeat(now))
+                self._next_heartbeat += 1_000_000_000
+
+    def stop(self) -> None:
+        self.stopping.set()
+        self.join(timeout=2.0)
+
+    def _samples(self, now: int) -> None:
+        for i, node in self.nodes.items():
+            period = int(1e9 / node.rate_hz)
+            while self._next_sample[i] <= now:
+                t = self._next_sample[i]
+                if node.running:
+                    q, a = self.motion(i, (t - self.start_ns) * 1e-9)
+                    for frame in node.sample(t, np.asarray(q), np.asarray(a)):
+                        self._send(frame)
+                self._next_sample[i] += period
+
+    def _send(self, frame: tuple[int, bytes]) -> None:
+        try:
+            self.bus.send(can.Message(arbitration_id=frame[0], data=frame[1], is_extended_id=False))
+        except can.CanError:
+            pass  # a full or broken bus: the frame is lost, as on a real one
