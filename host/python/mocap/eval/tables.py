@@ -154,10 +154,14 @@ def _tuning(r: dict) -> list[str]:
 
 def markdown(r: dict, command: str) -> str:
     lines = ["# Results on the test clips", "",
-             f"Regenerate everything on this page: `{command}` (seed {r['seed']}, ~11 minutes on one core).",
+             f"Regenerate everything on this page: `{command}` (seed {r['seed']}, 16 minutes on one core of "
+             "a 2-core AMD EPYC).",
              "Simulated studio of `host/python/mocap/sim/` on the test clips of `host/data/motion_split.json`;",
              "oracle calibration (true skeleton and sensor mounting) except in \"Estimated calibration\"; raw numbers",
-             "in `docs/results.json`.",
+             "in `docs/results.json`. Each take reaches the solver and the calibration as the live host's own",
+             "input path delivers it: its camera frames and IMU samples sent as the studio's messages",
+             "(`mocap.sim.messages`: keypoints at the wire's float32 precision, the IMUs sampled on the camera",
+             "trigger) and synchronised by the C++ `InputPath` that `mocapd` runs.",
              "Real video (the edge detector and a video-only solve of Pose2Sim's Balancing trial):",
              "`docs/results_real.md`.", ""]
     lines += _configurations(r) + [""] + _ablations(r) + [""] + _cameras_and_subsampling(r) + [""] + _tuning(r)
