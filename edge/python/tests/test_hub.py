@@ -42,6 +42,15 @@ def test_the_line_on_top_of_the_points_is_the_hull_edge_at_their_mean():
     assert np.all(a + b * x >= y - 1e-12)
 
 
+def test_leaving_out_points_far_below_gives_the_same_line():
+    rng = np.random.default_rng(5)
+    x = np.sort(rng.uniform(0, 1e7, 800))  # µs over 10 s
+    y = 1000.00007 * x - rng.uniform(0, 5e5, 800)  # ns, delays up to 0.5 ms
+    full = upper_envelope_line(x, y)
+    pruned = upper_envelope_line(x, y, slope=1000.0, margin=2e5)
+    assert pruned == pytest.approx(full, rel=1e-12)
+
+
 def test_a_node_clock_unwraps_its_timer_and_restarts_after_a_reboot():
     clock = NodeClock()
     start = 2**32 - 500_000  # µs: the node's timer wraps half a second in

@@ -15,7 +15,10 @@ The fit uses the pairs of the last `window_s` (the node's oscillator wanders), u
 node's 32-bit timer (71.6 minutes) by the fit's own prediction, and starts again when a node's
 time jumps away from the prediction (the node rebooted: its timer restarted). Mapped times
 never go backwards: a node's sample mapped before the one mapped before it (a new fit moved the
-line) is held at that one plus a nanosecond, and counted.
+line) is held at that one plus a nanosecond, and counted. Beyond 400 pairs the line is
+refitted once a twentieth of them is new (every 0.5 s at 50 Syncs a second over 10 s), not at
+every pair: the fit costs the number of pairs, and the line then moves by far less than its
+error in between.
 """
 
 from __future__ import annotations
@@ -27,6 +30,9 @@ import numpy as np
 
 WRAP_US = 1 << 32  # the node's timer
 REBOOT_JUMP_US = 5_000.0  # a reported time this far from the fit's prediction: the node restarted
+PRUNE_MARGIN_NS = 200_000.0  # pairs this far below the previous line's top are not hull candidates
+REFIT_EVERY_PAIR = 400  # up to this many pairs the line is refitted at each; beyond, once
+REFIT_FRACTION = 0.05  # this fraction of them is new
 
 
 @dataclasses.dataclass
@@ -34,32 +40,42 @@ class ClockStats:
     pairs: int = 0  # Sync pairs used since the last restart
     restarts: int = 0  # fits started again (the node's timer jumped: a reboot)
     held: int = 0  # mapped times held so as not to go backwards
-    residual_us: float = float("nan")  # median distance of the window's pairs below the line
 
 
-def upper_envelope_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+def upper_envelope_line(x: np.ndarray, y: np.ndarray, slope: float | None = None,
+                        margin: float = np.inf) -> tuple[float, float]:
     """(a, b) of y = a + b·x, the line on or above every point that minimises the summed
-    distance to them: the upper hull's edge at mean(x). At least two distinct x."""
+    distance to them: the upper hull's edge at mean(x). At least two distinct x.
+
+    With a `slope` known to within margin / (the span of x) — the previous fit's — points more
+    than `margin` below the highest line of that slope cannot touch the answer and are left out
+    of the hull (the mean stays that of all points): the same line, from fewer points."""
+    mean = float(x.mean())
+    if slope is not None and np.isfinite(margin):
+        r = y - slope * x
+        keep = r >= r.max() - margin
+        x, y = x[keep], y[keep]
     order = np.lexsort((y, x))
-    x, y = x[order], y[order]
+    xs, ys = x[order].tolist(), y[order].tolist()  # plain floats: the loop below is Python's
     hull: list[int] = []
-    for i in range(len(x)):  # monotone chain, upper hull, left to right
+    for i in range(len(xs)):  # monotone chain, upper hull, left to right
         while len(hull) >= 2:
             o, a = hull[-2], hull[-1]
-            if (x[a] - x[o]) * (y[i] - y[o]) - (y[a] - y[o]) * (x[i] - x[o]) >= 0:
+            if (xs[a] - xs[o]) * (ys[i] - ys[o]) - (ys[a] - ys[o]) * (xs[i] - xs[o]) >= 0:
                 hull.pop()  # a lies on or below the chord o-i
             else:
                 break
-        if hull and x[hull[-1]] == x[i]:
+        if hull and xs[hull[-1]] == xs[i]:
             hull.pop()  # same x: keep the higher (later in the sort)
         hull.append(i)
     if len(hull) == 1:
         raise ValueError("the points have one x: no line")
-    mean = x.mean()
-    k = int(np.clip(np.searchsorted(x[hull], mean) - 1, 0, len(hull) - 2))
+    k = 0
+    while k < len(hull) - 2 and xs[hull[k + 1]] <= mean:
+        k += 1
     i, j = hull[k], hull[k + 1]
-    b = (y[j] - y[i]) / (x[j] - x[i])
-    return float(y[i] - b * x[i]), float(b)
+    b = (ys[j] - ys[i]) / (xs[j] - xs[i])
+    return ys[i] - b * xs[i], b
 
 
 class NodeClock:
@@ -73,6 +89,8 @@ class NodeClock:
         self.origin: tuple[float, int] = (0.0, 0)  # (node us, hub ns) the line is written about
         self.last_mapped_ns: int | None = None
         self.stats = ClockStats()
+        self._new = 0  # pairs since the last fit
+        self._below_ns = np.zeros(0)
 
     @property
     def fitted(self) -> bool:
@@ -90,7 +108,9 @@ class NodeClock:
         self.pairs.append((node_us, hub_tx_ns))
         while self.pairs and hub_tx_ns - self.pairs[0][1] > self.window_ns:
             self.pairs.popleft()
-        self._fit()
+        self._new += 1
+        if len(self.pairs) <= REFIT_EVERY_PAIR or self._new >= REFIT_FRACTION * len(self.pairs):
+            self._fit()
 
     def to_hub_ns(self, node_us: float) -> int | None:
         """The hub time of an (unwrapped) node time; None before the first pair."""
@@ -133,13 +153,21 @@ class NodeClock:
 
     def _fit(self) -> None:
         x0, y0 = self.pairs[-1]
-        x = np.array([p[0] - x0 for p in self.pairs])
-        y = np.array([float(p[1] - y0) for p in self.pairs])
+        pairs = np.array(self.pairs, dtype=float)
+        x, y = pairs[:, 0] - x0, pairs[:, 1] - y0
         if len(self.pairs) >= 2:
-            a, b = upper_envelope_line(x, y)
+            span = float(x.max() - x.min())
+            # the slope moves by far less than 20 ppm between fits: 20 ppm over the span bounds
+            # how far below the top a touching pair can lie
+            margin = max(PRUNE_MARGIN_NS, 0.02 * span) if self.line is not None and len(self.pairs) > 20 else np.inf
+            a, b = upper_envelope_line(x, y, None if self.line is None else self.line[1], margin)
         else:  # one pair: through it, at the rate known so far
             a, b = 0.0, self.nominal_rate if self.line is None else self.line[1]
-        self.origin, self.line = (x0, y0), (a, b)
+        self.origin, self.line, self._new = (x0, y0), (a, b), 0
         self.stats.pairs = len(self.pairs)
-        below = (a + b * x) - y
-        self.stats.residual_us = float(np.median(below) / 1e3)
+        self._below_ns = (a + b * x) - y
+
+    @property
+    def residual_us(self) -> float:
+        """Median distance of the window's pairs below the line (µs): their queuing delays."""
+        return float(np.median(self._below_ns) / 1e3) if len(self._below_ns) else float("nan")

@@ -34,7 +34,7 @@ class HubConfig:
     acc_range_g: int = 16
     gyro_range_dps: int = 2000
     mode: str = "6d"
-    sync_hz: float = 50.0
+    sync_hz: float = 100.0  # Syncs per second: p99 sample-time error 17 µs after 2 s (50: 31 µs; make bench)
     batch_ms: float = 10.0
     stale_s: float = 1.0  # a node silent this long is reported stale
 

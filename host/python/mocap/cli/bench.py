@@ -1,4 +1,4 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware)."""
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,9 @@ from mocap.errors import DataMissingError
 from mocap.eval import bench, edge_detector
 from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
+from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "edge", "firmware"]
+KINDS = ["solver", "live", "edge", "firmware", "hub"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,6 +38,8 @@ def run(args: argparse.Namespace) -> int:
     if "firmware" in args.only:
         print(json.dumps(firmware_bench.firmware()), flush=True)
     bench.pin_to_one_core()
+    if "hub" in args.only:  # frames decoded per second on one core
+        print(json.dumps(hub_bench.hub()), flush=True)
     if "solver" in args.only:
         try:
             result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats, settings=args.set)
