@@ -144,13 +144,26 @@ def test_bad_frames_are_counted_and_dropped_never_raised():
     assert hub.nodes[3].counts.unpaired == 2
 
 
+def test_the_bus_budget_counts_worst_case_frames():
+    from mocap_edge.hub import bus_budget
+
+    # Davis et al. 2007: (34 + 8n + 13 + floor((34 + 8n - 1) / 4)) bits for an 11-bit id
+    assert [bus_budget.classic_frame_bits(n) for n in (0, 1, 5, 8)] == [55, 65, 105, 135]
+    assert bus_budget.classic_load(13, 60, 100) == pytest.approx((13 * 60 * 270 + 100 * (65 + 13 * 105)
+                                                                  + 13 * 135) / 1e6)
+    assert bus_budget.max_nodes(120, 100) == 13 and bus_budget.check(13, 120, 100) is None
+
+
 def test_hub_toml_is_checked(tmp_path):
     path = tmp_path / "hub.toml"
     path.write_text('[hub]\nid = "hub1"\nrate_hz = 120\n\n[nodes]\n3 = "pelvis"\n7 = "forearm_l"\n')
     config = HubConfig.load(path)
     assert config.hub_id == "hub1" and config.rate_hz == 120 and config.names == {3: "pelvis", 7: "forearm_l"}
     for text, what in (('[hub]\nspeed = 3\n', "unknown key 'speed'"), ('[nodes]\n64 = "x"\n', "node ids"),
-                       ('[nodes]\n1 = "a"\n2 = "a"\n', "each sensor name once"), ("[hub\n", "hub.toml")):
+                       ('[nodes]\n1 = "a"\n2 = "a"\n', "each sensor name once"), ("[hub\n", "hub.toml"),
+                       ('[hub]\nrate_hz = 500\n', "rate_hz 500"), ('[hub]\ngyro_range_dps = 300\n', "gyro_range_dps"),
+                       ('[hub]\nrate_hz = 120\n[nodes]\n' + "".join(f'{i} = "s{i}"\n' for i in range(1, 18)),
+                        "17 nodes at 120 Hz with 100 Syncs/s load the CAN bus 74% .*at most 13 nodes")):
         path.write_text(text)
         with pytest.raises(EdgeError, match=what):
             HubConfig.load(path)

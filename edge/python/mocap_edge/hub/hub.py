@@ -17,6 +17,7 @@ from pathlib import Path
 
 from mocap.net import wire
 from mocap_edge.errors import EdgeError
+from mocap_edge.hub import bus_budget
 from mocap_edge.hub.can_db import CanFrameError, Database
 from mocap_edge.hub.node import Node, Sample
 
@@ -38,6 +39,20 @@ class HubConfig:
     batch_ms: float = 10.0
     stale_s: float = 1.0  # a node silent this long is reported stale
 
+    def __post_init__(self):
+        """EdgeError for a value the nodes refuse, or a bus loaded above bus_budget.MAX_LOAD."""
+        problems = [what for bad, what in (
+            (not 1 <= self.rate_hz <= 400, f"rate_hz {self.rate_hz} is not 1..400"),
+            (self.acc_range_g not in (2, 4, 8, 16), f"acc_range_g {self.acc_range_g} is not 2, 4, 8 or 16"),
+            (self.gyro_range_dps not in (250, 500, 1000, 2000),
+             f"gyro_range_dps {self.gyro_range_dps} is not 250, 500, 1000 or 2000"),
+            (self.mode not in ("6d", "9d"), f"mode {self.mode!r} is not \"6d\" or \"9d\""),
+            (not self.sync_hz > 0 or not self.batch_ms > 0 or not self.stale_s > 0,
+             "sync_hz, batch_ms and stale_s are > 0")) if bad]
+        load = bus_budget.check(len(self.names), self.rate_hz, self.sync_hz) if not problems else None
+        if problems or load:
+            raise EdgeError(f"hub configuration: {problems[0] if problems else load}")
+
     @classmethod
     def load(cls, path: Path) -> HubConfig:
         try:
@@ -56,7 +71,10 @@ class HubConfig:
         if any(not 1 <= k <= 63 for k in names) or len(set(names.values())) != len(names):
             raise EdgeError(f"{path}: [nodes]: node ids 1..63, each sensor name once")
         settings = {("hub_id" if k == "id" else k): v for k, v in hub.items()}
-        return cls(names, **settings)
+        try:
+            return cls(names, **settings)
+        except EdgeError as e:
+            raise EdgeError(f"{path}: {e}") from None
 
 
 class Hub:
