@@ -179,7 +179,7 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
     from mocap_edge.hub.service import HubService
     from mocap_edge.hub.sim_runner import NodeRunner
 
-    hub_port, nodes_port = open_bus("virtual:test_hub_live"), open_bus("virtual:test_hub_live")
+    hub_port, nodes_port = open_bus("virtual:test_hub_live"), open_bus("virtual:test_hub_live", own_messages=False)
     start = time.time_ns()
     nodes = make_nodes(list(NAMES) + [40], np.random.default_rng(2), rate_hz=30, origin_ns=start)
     for node in nodes.values():

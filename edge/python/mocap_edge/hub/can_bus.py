@@ -28,13 +28,14 @@ class CanPort:
     echoes: bool  # the bus hands back the frames it sent, stamped when they left
 
 
-def open_bus(uri: str) -> CanPort:
-    """The bus a URI names; EdgeError when it cannot be opened."""
+def open_bus(uri: str, own_messages: bool = True) -> CanPort:
+    """The bus a URI names; EdgeError when it cannot be opened. own_messages=False: the frames
+    this port sends are not handed back (simulated nodes, which need no transmit times)."""
     interface, _, channel = uri.partition(":")
     if interface not in ("socketcan", "slcan", "virtual") or not channel:
         raise EdgeError(f"--can {uri!r}: socketcan:IFACE, slcan:socket://HOST:PORT, slcan:DEVICE or virtual:NAME")
-    options = {"receive_own_messages": True} if interface in ECHOING else {"bitrate": 1_000_000}
+    options = {"receive_own_messages": own_messages} if interface in ECHOING else {"bitrate": 1_000_000}
     try:
-        return CanPort(can.Bus(interface=interface, channel=channel, **options), interface in ECHOING)
+        return CanPort(can.Bus(interface=interface, channel=channel, **options), own_messages and interface in ECHOING)
     except (can.CanError, OSError, ValueError) as e:
         raise EdgeError(f"--can {uri}: {e}") from None

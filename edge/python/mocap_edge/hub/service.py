@@ -19,6 +19,7 @@ from mocap_edge.hub.can_bus import CanPort
 from mocap_edge.hub.hub import Hub
 
 SYNC_ID = 0x080
+DRAIN = 64
 
 
 class HubService:
@@ -28,7 +29,6 @@ class HubService:
         self.bus_errors: collections.Counter[str] = collections.Counter()
         self.configured: dict[int, int] = {}  # node id -> its restarts when it was configured
         self._sync_seq = 0
-        self._sent_syncs: collections.deque[int] = collections.deque(maxlen=16)  # sequences awaiting their echo
 
     def run(self, stop, duration_s: float = 0.0) -> int:
         """Runs until stop() is true (or duration_s passed, if > 0); returns batches published."""
@@ -41,6 +41,11 @@ class HubService:
                 self._send_sync()
                 next_sync += sync_ns
             message = self.port.bus.recv(timeout=max(0.0, min(next_sync, next_batch) - self.clock_ns()) * 1e-9)
+            for _ in range(DRAIN):  # what is waiting, up to DRAIN frames before the timers are looked at
+                if message is None:
+                    break
+                self._receive(message)
+                message = self.port.bus.recv(timeout=0.0)
             if message is not None:
                 self._receive(message)
             now = self.clock_ns()
@@ -65,12 +70,8 @@ class HubService:
     def _send_sync(self) -> None:
         seq = self._sync_seq
         self._sync_seq = (self._sync_seq + 1) % 256
-        if not self._send(*self.hub.db.sync(seq)):
-            return
-        if self.port.echoes:
-            self._sent_syncs.append(seq)  # its transmit time comes with its echo
-        else:
-            self.hub.sync_sent(seq, self.clock_ns())
+        if self._send(*self.hub.db.sync(seq)) and not self.port.echoes:
+            self.hub.sync_sent(seq, self.clock_ns())  # else its transmit time comes with its echo
 
     def _receive(self, message: can.Message) -> None:
         if message.is_error_frame:
@@ -78,8 +79,8 @@ class HubService:
             return
         stamp = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
         if not message.is_rx:  # our own frame, echoed: a Sync's echo is its transmit time
-            if message.arbitration_id == SYNC_ID and self._sent_syncs:
-                self.hub.sync_sent(self._sent_syncs.popleft(), stamp)
+            if message.arbitration_id == SYNC_ID and len(message.data) == 1:
+                self.hub.sync_sent(message.data[0], stamp)
             return
         self.hub.on_frame(stamp, message.arbitration_id, bytes(message.data), message.is_extended_id,
                           message.is_remote_frame)

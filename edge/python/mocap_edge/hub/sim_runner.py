@@ -1,7 +1,7 @@
 """Simulated sensor nodes on a real python-can bus, in real time (a thread): each answers the
 hub's Syncs and Commands, sends a heartbeat every second and, while running, its samples at
-its rate — what the firmware's nodes do, for the hub's end-to-end tests and the simulated
-studio (`virtual:` buses are in-process: the runner and the hub share the process)."""
+its rate — what the firmware's nodes do, for the hub's end-to-end tests (`virtual:` buses are
+in-process: the runner and the hub share the process)."""
 
 from __future__ import annotations
 
@@ -27,11 +27,15 @@ class NodeRunner(threading.Thread):
     def run(self) -> None:
         while not self.stopping.is_set():
             message = self.bus.recv(timeout=0.001)
+            while message is not None:  # every frame waiting
+                if message.is_rx and not message.is_error_frame:
+                    # stamped when it reached the bus, as a node's CAN controller stamps it
+                    now = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
+                    for node in self.nodes.values():
+                        for frame in node.on_frame(message.arbitration_id, bytes(message.data), now):
+                            self._send(frame)
+                message = self.bus.recv(timeout=0.0)
             now = self.clock_ns()
-            if message is not None and message.is_rx and not message.is_error_frame:
-                for node in self.nodes.values():
-                    for frame in node.on_frame(message.arbitration_id, bytes(message.data), now):
-                        self._send(frame)
             self._samples(now)
             if now >= self._next_heartbeat:
                 for node in self.nodes.values():
@@ -58,3 +62,4 @@ class NodeRunner(threading.Thread):
             self.bus.send(can.Message(arbitration_id=frame[0], data=frame[1], is_extended_id=False))
         except can.CanError:
             pass  # a full or broken bus: the frame is lost, as on a real one
+
