@@ -51,6 +51,18 @@ def test_leaving_out_points_far_below_gives_the_same_line():
     assert pruned == pytest.approx(full, rel=1e-12)
 
 
+def test_pairs_at_one_node_time_keep_the_line_known_so_far():
+    """A node that stamps several Syncs with one time (they waited in its queue) has no slope
+    to fit from them: the clock keeps going, never raises."""
+    clock = NodeClock()
+    for k in range(5):
+        clock.add_pair(k * 10_000_000, 777)
+    assert clock.to_hub_ns(778) == pytest.approx(40_001_000, abs=1)  # through the latest, 1000 ns/µs
+    for k in range(5, 30):
+        clock.add_pair(k * 10_000_000, 777 + (k - 4) * 10_000)
+    assert clock.to_hub_ns(777 + 26 * 10_000) == pytest.approx(300_000_000, abs=1_000)
+
+
 def test_a_node_clock_unwraps_its_timer_and_restarts_after_a_reboot():
     clock = NodeClock()
     start = 2**32 - 500_000  # µs: the node's timer wraps half a second in
@@ -118,7 +130,7 @@ def test_a_rebooted_node_is_refitted_and_keeps_publishing():
     bus.run(0.0, 3.0)
     nodes[12].reboot(NodeOscillator(30.0, 0.0, 0.1, rng))
     bus.run(3.0, 6.0)
-    assert hub.nodes[12].counts.restarts >= 1
+    assert hub.nodes[12].counts.reboots == 1
     times = [s.sample_time_ns for s, _ in samples(bus) if s.sensor_id == "foot_r"]
     assert np.all(np.diff(times) > 0) and max(times) > 5.9e9
 

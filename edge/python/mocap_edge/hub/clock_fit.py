@@ -29,7 +29,10 @@ import dataclasses
 import numpy as np
 
 WRAP_US = 1 << 32  # the node's timer
-REBOOT_JUMP_US = 5_000.0  # a reported time this far from the fit's prediction: the node restarted
+# A reported time this far from the fit's prediction: the node restarted (a timer that started
+# again from 0). Generous: a link with long queues (an SLCAN adapter, the emulator's UART)
+# delays some pairs by hundreds of milliseconds; the timer wraps only every 71.6 minutes.
+REBOOT_JUMP_US = 1_000_000.0
 PRUNE_MARGIN_NS = 200_000.0  # pairs this far below the previous line's top are not hull candidates
 REFIT_EVERY_PAIR = 400  # up to this many pairs the line is refitted at each; beyond, once
 REFIT_FRACTION = 0.05  # this fraction of them is new
@@ -54,7 +57,8 @@ def upper_envelope_line(x: np.ndarray, y: np.ndarray, slope: float | None = None
     if slope is not None and np.isfinite(margin):
         r = y - slope * x
         keep = r >= r.max() - margin
-        x, y = x[keep], y[keep]
+        if np.ptp(x[keep]) > 0:  # else the pruned points have one x: the hull needs them all
+            x, y = x[keep], y[keep]
     order = np.lexsort((y, x))
     xs, ys = x[order].tolist(), y[order].tolist()  # plain floats: the loop below is Python's
     hull: list[int] = []
@@ -155,13 +159,13 @@ class NodeClock:
         x0, y0 = self.pairs[-1]
         pairs = np.array(self.pairs, dtype=float)
         x, y = pairs[:, 0] - x0, pairs[:, 1] - y0
-        if len(self.pairs) >= 2:
-            span = float(x.max() - x.min())
+        span = float(x.max() - x.min())
+        if span > 0:
             # the slope moves by far less than 20 ppm between fits: 20 ppm over the span bounds
             # how far below the top a touching pair can lie
             margin = max(PRUNE_MARGIN_NS, 0.02 * span) if self.line is not None and len(self.pairs) > 20 else np.inf
             a, b = upper_envelope_line(x, y, None if self.line is None else self.line[1], margin)
-        else:  # one pair: through it, at the rate known so far
+        else:  # one pair (or pairs at one node time): through the latest, at the rate known so far
             a, b = 0.0, self.nominal_rate if self.line is None else self.line[1]
         self.origin, self.line, self._new = (x0, y0), (a, b), 0
         self.stats.pairs = len(self.pairs)

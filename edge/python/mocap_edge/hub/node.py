@@ -41,7 +41,8 @@ class NodeCounts:
     unpaired: int = 0  # an ImuQuat without its ImuAccel, or the reverse (lost, duplicated or reordered)
     unsynced: int = 0  # samples before the node's clock was fitted
     heartbeats: int = 0
-    restarts: int = 0  # the node rebooted (boot state, or its timer jumped)
+    reboots: int = 0  # the node rebooted (its heartbeat went back to the boot state)
+    clock_restarts: int = 0  # its clock fit started again (its timer jumped: a reboot missed by heartbeats)
 
 
 class Node:
@@ -69,14 +70,14 @@ class Node:
         self.heartbeat, self.last_heard_ns = signals, arrival_ns
         self.counts.heartbeats += 1
         if rebooted:  # its timer and sample counter start again
-            self.counts.restarts += 1
+            self.counts.reboots += 1
             self.clock = NodeClock(self.clock.window_ns / 1e9)
             self._counter = self._last_time_ns = None
 
     def on_sync_report(self, sync_tx_ns: int, rx_time_us: int, arrival_ns: int) -> None:
         restarts = self.clock.stats.restarts
         self.clock.add_pair(sync_tx_ns, rx_time_us)
-        self.counts.restarts += self.clock.stats.restarts - restarts
+        self.counts.clock_restarts += self.clock.stats.restarts - restarts
         self.last_heard_ns = arrival_ns
 
     def on_quat(self, signals: dict, arrival_ns: int) -> None:

@@ -27,7 +27,7 @@ class HubService:
         """publish(ImuBatch) sends a batch; clock_ns is the hub's clock (the shared timebase)."""
         self.port, self.hub, self.publish, self.clock_ns = port, hub, publish, clock_ns
         self.bus_errors: collections.Counter[str] = collections.Counter()
-        self.configured: dict[int, int] = {}  # node id -> its restarts when it was configured
+        self.configured: dict[int, int] = {}  # node id -> its reboots when it was configured
         self._sync_seq = 0
 
     def run(self, stop, duration_s: float = 0.0) -> int:
@@ -92,13 +92,13 @@ class HubService:
         for node in self.hub.nodes.values():
             if not node.name or node.heartbeat is None:
                 continue
-            if self.configured.get(node.id) == node.counts.restarts:
+            if self.configured.get(node.id) == node.counts.reboots:
                 continue
             for command, args in (("stop", {}), ("set_rate", {"rate_hz": c.rate_hz}),
                                   ("set_ranges", {"acc_range_g": c.acc_range_g, "gyro_range_dps": c.gyro_range_dps}),
                                   ("set_mode", {"mode": 1 if c.mode == "9d" else 0}), ("start", {})):
                 self._send(*self.hub.db.command(node.id, command, **args))
-            self.configured[node.id] = node.counts.restarts
+            self.configured[node.id] = node.counts.reboots
 
 
 def publisher(endpoint: str):
