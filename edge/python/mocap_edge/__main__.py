@@ -16,6 +16,8 @@ import signal
 import sys
 import time
 
+import can
+
 from mocap_edge import camera_box, imu_hub, pacing
 from mocap_edge.detect.base import Detector, open_detector
 from mocap_edge.errors import EdgeError, TriggerError
@@ -102,7 +104,8 @@ def _can_hub(a: argparse.Namespace) -> int:
         service = HubService(port, Hub(config), publish)
         n = service.run(lambda: bool(stopping), a.duration)
     finally:
-        port.bus.shutdown()
+        with contextlib.suppress(can.CanError):  # an adapter already gone cannot be closed cleanly
+            port.bus.shutdown()
         socket.close()
     print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "
           f"bus errors {dict(service.bus_errors)}", file=sys.stderr)

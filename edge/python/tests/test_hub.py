@@ -226,7 +226,8 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
 
 def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
     """python-can raises CanOperationError when the controller is bus-off (SocketCAN: ENETDOWN
-    / ENOBUFS) and hands error frames over as messages; the virtual bus makes neither."""
+    / ENOBUFS) or the adapter's link fails, and hands error frames over as messages; the
+    virtual bus makes none of them."""
     import can
 
     from mocap_edge.hub.can_bus import CanPort
@@ -243,6 +244,9 @@ def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
                 raise can.CanOperationError("Transmit failed: bus off")
 
         def _recv_internal(self, timeout):
+            self.receives = getattr(self, "receives", 0) + 1
+            if self.receives == 5:  # the adapter's socket went away once
+                raise can.CanOperationError("Could not read from serial device")
             return can.Message(is_error_frame=True, timestamp=1.0), False
 
     clock = iter(range(0, 10**10, 5_000_000))  # 5 ms per reading
@@ -250,6 +254,7 @@ def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
                          lambda batch: None, clock_ns=lambda: next(clock))
     service.run(lambda: False, duration_s=0.2)
     assert service.bus_errors["bus_off"] == 5 and service.bus_errors["error_frames"] > 10
+    assert service.bus_errors["receive_failed"] == 1
     assert service.port.bus.sends > 8  # it kept sending Syncs after the bus came back
 
 

@@ -19,7 +19,8 @@ from mocap_edge.hub.can_bus import CanPort
 from mocap_edge.hub.hub import Hub
 
 SYNC_ID = 0x080
-DRAIN = 64
+DRAIN = 64  # frames fed before the timers are looked at again
+RETRY_S = 0.1  # after the adapter failed
 
 
 class HubService:
@@ -40,14 +41,7 @@ class HubService:
             if now >= next_sync:
                 self._send_sync()
                 next_sync += sync_ns
-            message = self.port.bus.recv(timeout=max(0.0, min(next_sync, next_batch) - self.clock_ns()) * 1e-9)
-            for _ in range(DRAIN):  # what is waiting, up to DRAIN frames before the timers are looked at
-                if message is None:
-                    break
-                self._receive(message)
-                message = self.port.bus.recv(timeout=0.0)
-            if message is not None:
-                self._receive(message)
+            self._drain(max(0.0, min(next_sync, next_batch) - self.clock_ns()) * 1e-9)
             now = self.clock_ns()
             if now >= next_batch:
                 batch = self.hub.take_batch(now)
@@ -57,6 +51,23 @@ class HubService:
                 next_batch += batch_ns
                 self._configure_new_nodes()
         return published
+
+    def _drain(self, timeout_s: float) -> None:
+        """Feeds what is waiting (up to DRAIN frames, waiting at most timeout_s for the first).
+        An adapter that fails (unplugged, its socket closed) is counted, and tried again after
+        a pause: the hub keeps running."""
+        try:
+            message = self.port.bus.recv(timeout=timeout_s)
+            for _ in range(DRAIN):
+                if message is None:
+                    return
+                self._receive(message)
+                message = self.port.bus.recv(timeout=0.0)
+            if message is not None:
+                self._receive(message)
+        except can.CanOperationError:
+            self.bus_errors["receive_failed"] += 1
+            time.sleep(RETRY_S)
 
     def _send(self, frame_id: int, data: bytes) -> bool:
         try:
