@@ -48,7 +48,7 @@ def test_the_hub_times_and_publishes_what_the_firmware_sampled(qemu_arm, tmp_pat
     # follows it; sample times are never taken from the arrivals.)
     assert np.all(np.diff(times) > 0) and np.all(times > started) and np.all(sent > times)
     half = len(times) // 2
-    assert (times[-1] - times[half]) / (sent[-1] - sent[half]) == pytest.approx(1.0, abs=0.1)
+    assert (times[-1] - times[half]) / (sent[-1] - sent[half]) == pytest.approx(1.0, abs=0.2)
     assert np.median(sent - times) < 200e6
     # The values the firmware logged, within the CAN signals' resolution (matched by counter).
     logged = {entry.seq: entry for entry in read_log(log)}
