@@ -24,6 +24,10 @@ bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t
   if (!d.message) return input_.monitor().Drop(wire::ToString(d.reason), d.detail, why);
   if (auto* calibration = dynamic_cast<const v1::Calibration*>(d.message.get()))
     return FeedCalibration(*calibration, now_ns, why);
+  if (auto* report = dynamic_cast<const v1::Health*>(d.message.get())) {
+    if (edge_health_.Add(*report, now_ns)) return true;
+    return input_.monitor().Drop("invalid", "a Health report without its source", why);
+  }
   return input_.Feed(*d.message, now_ns, &step_.solver(), why);
 }
 
@@ -78,7 +82,9 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   in.calibrations = calibrations_.counts();
   in.calibration_active = step_.any_imu_calibrated();
   in.frames_solved = frames_solved_;
-  return input_.monitor().Health(now_ns, in);
+  v1::Health health = input_.monitor().Health(now_ns, in);
+  edge_health_.AppendTo(now_ns, &health);
+  return health;
 }
 
 }  // namespace mocap

@@ -6,7 +6,8 @@
 //
 // Its parts, each in its own file: InputPath (wire message -> synchronised frame: decoding,
 // subject choice, synchronisation, drops and stream statistics), CalibrationQueue, SolveStep
-// (the solver with the IMUs it may use), EncodePoseFrame, StreamMonitor (Health).
+// (the solver with the IMUs it may use), EncodePoseFrame, StreamMonitor (Health), EdgeHealth
+// (the edge processes' own reports, folded into Health).
 #ifndef MOCAP_DAEMON_PIPELINE_H_
 #define MOCAP_DAEMON_PIPELINE_H_
 
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "calibration_queue.h"
+#include "edge_health.h"
 #include "input_path.h"
 #include "mocap/v1/calibration.pb.h"
 #include "mocap/v1/health.pb.h"
@@ -74,6 +76,7 @@ class HostPipeline {
   SolveStep step_;
   InputPath input_;
   CalibrationQueue calibrations_;
+  EdgeHealth edge_health_;
   uint64_t frames_solved_ = 0;
 };
 

@@ -145,6 +145,37 @@ TEST(Pipeline, FlushSolvesWhatIsStillWaitingAtTheEndOfTheInput) {
   EXPECT_EQ(pipeline->frames_solved(), 10u);
 }
 
+TEST(Pipeline, AnImuHubsOwnHealthIsFoldedIntoTheHostsAndGoesStaleWhenItStops) {
+  Studio studio;
+  auto pipeline = studio.Pipeline();
+  v1::Health hub;
+  hub.set_source("hub0");
+  v1::StreamHealth* node = hub.add_streams();
+  node->set_stream("imu/pelvis");
+  node->set_active(true);
+  node->set_lost(4);
+  node->set_clock_residual_us(12.5);
+  hub.add_streams()->set_stream("bus");
+  EXPECT_TRUE(pipeline->Feed("mocap.v1.Health", hub.SerializeAsString(), kT0));
+  v1::Health nameless = hub;
+  nameless.clear_source();
+  EXPECT_FALSE(pipeline->Feed("mocap.v1.Health", nameless.SerializeAsString(), kT0));
+  const auto find = [](const v1::Health& h, const std::string& name) {
+    for (const v1::StreamHealth& s : h.streams())
+      if (s.stream() == name) return s;
+    ADD_FAILURE() << "no stream " << name;
+    return v1::StreamHealth();
+  };
+  const v1::Health now = pipeline->Health(kT0 + 1'000'000'000);
+  const v1::StreamHealth pelvis = find(now, "hub0/imu/pelvis");
+  EXPECT_TRUE(pelvis.active());
+  EXPECT_EQ(pelvis.lost(), 4u);
+  EXPECT_EQ(pelvis.clock_residual_us(), 12.5);
+  EXPECT_FALSE(find(now, "hub0/bus").active());  // as the hub reported it
+  EXPECT_FALSE(find(pipeline->Health(kT0 + 5'000'000'000), "hub0/imu/pelvis").active());
+  EXPECT_EQ(pipeline->dropped().at("invalid"), 1u);  // the nameless one
+}
+
 TEST(Pipeline, AStoppedCameraOrImuDegradesTheSolveWhichRecoversWhenItReturns) {
   Studio studio;
   auto pipeline = studio.Pipeline();

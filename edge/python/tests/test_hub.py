@@ -5,6 +5,7 @@ reboot, and every kind of bad frame counted, never a crash."""
 import numpy as np
 import pytest
 
+from mocap.net import wire
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.can_db import Database
 from mocap_edge.hub.clock_fit import NodeClock, upper_envelope_line
@@ -115,11 +116,15 @@ def test_samples_come_out_on_the_hubs_clock_with_their_orientation():
 def test_an_unplugged_node_goes_stale_and_rejoins_and_its_gap_is_counted_lost():
     hub, bus = run(seconds=3.5, silent={7: [(2.0, 4.0)]})
     assert [n.id for n in hub.stale(int(3.5e9))] == [7]
+    streams = {s.stream: s for s in hub.health(int(3.5e9)).streams}
+    assert not streams["imu/forearm_l"].active and streams["imu/pelvis"].active
     bus.run(3.5, 6.0)
     assert hub.stale(int(6e9)) == []
     times = [s.sample_time_ns for s, _ in samples(bus) if s.sensor_id == "forearm_l"]
     assert max(np.diff(times)) > 1.9e9 and max(times) > 5.9e9
     assert hub.nodes[7].counts.lost == pytest.approx(120, abs=1)  # 2 s at 60 Hz, the counter wrapped
+    streams = {s.stream: s for s in hub.health(int(6e9)).streams}
+    assert streams["imu/forearm_l"].active and streams["imu/forearm_l"].lost == hub.nodes[7].counts.lost
 
 
 def test_a_rebooted_node_is_refitted_and_keeps_publishing():
@@ -197,9 +202,9 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
     for node in nodes.values():
         node.running, node.state = False, "idle"
     runner = NodeRunner(nodes_port.bus, nodes, turning)
-    batches = []
+    published = []
     config = HubConfig(dict(NAMES), rate_hz=60, sync_hz=50)
-    service = HubService(hub_port, Hub(config), batches.append)
+    service = HubService(hub_port, Hub(config), published.append)
     runner.start()
     try:
         service.run(lambda: False, duration_s=2.5)
@@ -207,7 +212,16 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
         runner.stop()
         hub_port.bus.shutdown()
         nodes_port.bus.shutdown()
+    batches = [m for m in published if isinstance(m, wire.ImuBatch)]
+    healths = [m for m in published if isinstance(m, wire.Health)]
     assert all(nodes[i].running and nodes[i].rate_hz == 60 for i in NAMES) and not nodes[40].running
+    # once a second the hub's Health: each named node active, at its rate, its clock fitted
+    last = {s.stream: s for s in healths[-1].streams}
+    assert len(healths) == 2 and healths[-1].source == "hub0" and set(last) == {*(f"imu/{n}" for n in NAMES.values()), "bus"}
+    for name in NAMES.values():
+        s = last[f"imu/{name}"]
+        assert s.active and s.rate_hz == pytest.approx(60, abs=6) and s.lost == 0 and 0 <= s.clock_residual_us < 2000
+    assert last["bus"].received > 0 and last["bus"].bus_errors == 0
     got = [s for b in batches for s in b.samples]
     assert {s.sensor_id for s in got} == set(NAMES.values())
     assert 40 in service.hub.nodes and service.hub.nodes[40].heartbeat  # discovered; not in hub.toml: not started

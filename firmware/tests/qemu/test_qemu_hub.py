@@ -11,6 +11,7 @@ import time
 import numpy as np
 import pytest
 
+from mocap.net import wire
 from mocap_edge.hub.can_bus import CanPort
 from mocap_edge.hub.hub import Hub, HubConfig
 from mocap_edge.hub.service import HubService
@@ -24,16 +25,19 @@ def test_the_hub_times_and_publishes_what_the_firmware_sampled(qemu_arm, tmp_pat
     image = qemu_arm.board_image("lm3s6965evb", "lm3s6965evb_node")
     log = tmp_path / "node_log.txt"
     qemu, bus = qemu_arm.start_slcan_node(image, log)
-    batches = []
+    published = []
     config = HubConfig({NODE_ID: "pelvis"}, rate_hz=50, sync_hz=20)
-    service = HubService(CanPort(bus, echoes=False), Hub(config), batches.append)
+    service = HubService(CanPort(bus, echoes=False), Hub(config), published.append)
     try:
         started = time.time_ns()
         service.run(lambda: False, duration_s=4.0)
     finally:
         bus.shutdown()
         qemu.close()
+    batches = [m for m in published if isinstance(m, wire.ImuBatch)]
     node = service.hub.nodes[NODE_ID]
+    health = [m for m in published if isinstance(m, wire.Health)][-1]
+    assert health.streams[0].stream == "imu/pelvis" and health.streams[0].active
     assert node.heartbeat["fw_version_major"] == 1 and node.reply["rate_hz"] == 50 and node.reply["running"] == 1
     samples = [s for b in batches for s in b.samples]
     assert len(samples) > 50 and {s.sensor_id for s in samples} == {"pelvis"}

@@ -85,6 +85,9 @@ class Hub:
         self._syncs: dict[int, int] = {}  # sync_seq -> the hub's transmit time
         self._pending: list[wire.ImuSample] = []
         self._sequence = 0
+        self.frames = 0  # frames received
+        self._health_ns: int | None = None  # the previous Health report's time
+        self._reported: dict[int, int] = {}  # node id -> its samples at the previous report
 
     def sync_sent(self, sequence: int, tx_ns: int) -> None:
         """A Sync left at tx_ns (the hub's clock: the frame's transmit timestamp)."""
@@ -93,6 +96,7 @@ class Hub:
     def on_frame(self, arrival_ns: int, frame_id: int, data: bytes, extended: bool = False,
                  remote: bool = False) -> bool:
         """One frame received at arrival_ns; False when it was dropped (counted by reason)."""
+        self.frames += 1
         try:
             frame = self.db.decode(frame_id, data, extended, remote)
         except CanFrameError as e:
@@ -119,6 +123,28 @@ class Hub:
         heard = {n.id: n.last_heard_ns for n in self.nodes.values()}
         return [self.nodes.get(i) or Node(i, name) for i, name in self.config.names.items()
                 if heard.get(i) is None or now_ns - heard[i] > limit]
+
+    def health(self, now_ns: int, bus_errors: int = 0) -> wire.Health:
+        """The hub's Health (source: its id): per named node "imu/<sensor>" (active unless
+        stale; samples per second since the previous report; samples, losses, unpaired frames
+        as duplicates, the clock fit's residual) and "bus" (frames received, bad frames as
+        malformed, bus errors)."""
+        health = wire.Health(source=self.config.hub_id, time_ns=now_ns)
+        period_s = (now_ns - self._health_ns) * 1e-9 if self._health_ns is not None else 0.0
+        stale = {n.id for n in self.stale(now_ns)}
+        for node_id, name in sorted(self.config.names.items()):
+            node = self.nodes.get(node_id) or Node(node_id, name)
+            c = node.counts
+            rate = (c.samples - self._reported.get(node_id, 0)) / period_s if period_s > 0 else 0.0
+            self._reported[node_id] = c.samples
+            health.streams.add(stream=f"imu/{name}", active=node_id not in stale, rate_hz=rate, received=c.samples,
+                               dropped=c.unsynced + c.unpaired, duplicates=c.unpaired, lost=c.lost,
+                               clock_residual_us=node.clock.residual_us)
+        bad = sum(self.dropped.values())
+        health.streams.add(stream="bus", active=True, received=self.frames, malformed=bad, dropped=bad,
+                           bus_errors=bus_errors)
+        self._health_ns = now_ns
+        return health
 
     def _on_Heartbeat(self, node: Node, signals: dict, arrival_ns: int) -> bool:
         node.on_heartbeat(signals, arrival_ns)

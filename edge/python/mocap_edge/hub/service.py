@@ -21,11 +21,13 @@ from mocap_edge.hub.hub import Hub
 SYNC_ID = 0x080
 DRAIN = 64  # frames fed before the timers are looked at again
 RETRY_S = 0.1  # after the adapter failed
+HEALTH_NS = 1_000_000_000  # a Health report every second
 
 
 class HubService:
     def __init__(self, port: CanPort, hub: Hub, publish, clock_ns=time.time_ns):
-        """publish(ImuBatch) sends a batch; clock_ns is the hub's clock (the shared timebase)."""
+        """publish(message) sends an ImuBatch or the hub's Health; clock_ns is the hub's clock
+        (the shared timebase)."""
         self.port, self.hub, self.publish, self.clock_ns = port, hub, publish, clock_ns
         self.bus_errors: collections.Counter[str] = collections.Counter()
         self.configured: dict[int, int] = {}  # node id -> its reboots when it was configured
@@ -36,7 +38,7 @@ class HubService:
         c = self.hub.config
         sync_ns, batch_ns = int(1e9 / c.sync_hz), int(c.batch_ms * 1e6)
         start = now = self.clock_ns()
-        next_sync, next_batch, published = now, now + batch_ns, 0
+        next_sync, next_batch, next_health, published = now, now + batch_ns, now + HEALTH_NS, 0
         while not stop() and not (duration_s > 0 and now - start >= duration_s * 1e9):
             if now >= next_sync:
                 self._send_sync()
@@ -50,6 +52,9 @@ class HubService:
                     published += 1
                 next_batch += batch_ns
                 self._configure_new_nodes()
+            if now >= next_health:
+                self.publish(self.hub.health(now, sum(self.bus_errors.values())))
+                next_health += HEALTH_NS
         return published
 
     def _drain(self, timeout_s: float) -> None:
@@ -113,6 +118,6 @@ class HubService:
 
 
 def publisher(endpoint: str):
-    """A publish(ImuBatch) function on a ZeroMQ PUB socket bound at endpoint, and the socket."""
+    """A publish(message) function on a ZeroMQ PUB socket bound at endpoint, and the socket."""
     socket = transport.publisher(zmq.Context.instance(), endpoint)
     return lambda batch: socket.send_multipart(wire.encode(batch)), socket
