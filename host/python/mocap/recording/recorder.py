@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import queue
 import threading
 import time
 from collections import Counter
@@ -155,13 +156,33 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
            stop: threading.Event | None = None, on_record: Callable[[str, Message], None] | None = None,
            session: str | Path | None = None) -> Counts:
     """Records what the publishers at `endpoints` send until `seconds` have passed or `stop` is
-    set; with the session's files attached when given."""
+    set; with the session's files attached when given. A thread of its own receives and stamps
+    each message as it arrives: writing (decoding, MCAP's chunks and their compression) takes
+    tens of milliseconds now and then, and stamps taken after it would be that late — later
+    than the host's synchroniser waits, so the recording solved again would drop camera frames
+    the live host used."""
     deadline = None if seconds is None else time.monotonic() + seconds
     stop = stop or threading.Event()
-    with Recorder(path, on_record) as recorder, zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
+    received: queue.Queue = queue.Queue()
+    receiver = threading.Thread(target=_receive, args=(endpoints, received, stop, deadline), daemon=True,
+                                name="recorder-receive")
+    with Recorder(path, on_record) as recorder:
         if session is not None:
             recorder.attach_session(session)
+        receiver.start()
+        while receiver.is_alive() or not received.empty():
+            try:
+                frames, stamp = received.get(timeout=POLL_MS / 1000)
+            except queue.Empty:
+                continue
+            recorder.write(frames, stamp)
+        return recorder.counts()
+
+
+def _receive(endpoints: list[str], received: queue.Queue, stop: threading.Event, deadline: float | None) -> None:
+    """Puts (frames, arrival ns) of every message in `received` until stop or the deadline."""
+    with zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             if socket.poll(POLL_MS):
-                recorder.write(socket.recv_multipart(), time.time_ns())
-        return recorder.counts()
+                frames = socket.recv_multipart()
+                received.put((frames, time.time_ns()))
