@@ -53,7 +53,7 @@ def sample_errors_us(seconds: float = 10.0, sync_hz: float = 10.0, sample_hz: fl
                 clock.add_pair(t_ns, int(node) % WRAP_US)
         elif clock.fitted:
             node = osc.advance(t_ns)
-            mapped = clock.to_hub_ns(np.floor(node) + clock.pairs[-1][0] - clock.pairs[-1][0])
+            mapped = clock.to_hub_ns(np.floor(node))
             times.append(t_ns * 1e-9)
             errors.append(abs(mapped - t_ns) / 1e3)
     return np.array(times), np.array(errors)

@@ -99,12 +99,8 @@ def host_frames(rig: _core.Rig, layout: _core.KeypointLayout, keypoints: np.ndar
             persons = [keypoints[c, f]] if (keypoints[c, f, :, 2] > 0).any() else []
             msg = frames.camera_frame(cam, f, time_ns, layout.name, persons)
             messages.append((time_ns, msg.DESCRIPTOR.full_name, msg.SerializeToString()))
-    path = _core.InputPath(rig, [], layout)
-    out = frames.synchronise(path, messages)
-    if len(out) != keypoints.shape[1] or path.dropped:
-        raise RuntimeError(f"the input path delivered {len(out)} of {keypoints.shape[1]} frames "
-                           f"(dropped: {dict(path.dropped)})")
-    return out
+    times = [int(round(f * 1e9 / RATE)) for f in range(keypoints.shape[1])]
+    return frames.synchronise_all(_core.InputPath(rig, [], layout), messages, times)
 
 
 def jitter(x: np.ndarray, rate: float = RATE) -> float:

@@ -43,6 +43,18 @@ def synchronise(path: _core.InputPath, messages: Iterable[tuple[int, str, bytes]
     return frames + path.flush()
 
 
+def synchronise_all(path: _core.InputPath, messages: Iterable[tuple[int, str, bytes]],
+                    times_ns: list[int]) -> list:
+    """synchronise() of messages that have no late or lost input (a simulated or offline
+    studio): RuntimeError unless the path released exactly the frames at times_ns and dropped
+    nothing — anything else is a fault of whoever made the messages, or of the path."""
+    frames = synchronise(path, messages)
+    if [f.time_ns for f in frames] != list(times_ns) or path.dropped:
+        raise RuntimeError(f"the input path delivered {len(frames)} of {len(times_ns)} frames "
+                           f"(dropped: {dict(path.dropped)})")
+    return frames
+
+
 def camera_frame(camera: _core.Camera, index: int, time_ns: int, layout: str,
                  persons: Iterable[np.ndarray] | None) -> wire.KeypointFrame:
     """The KeypointFrame a camera box sends for frame `index` captured (and sent) at time_ns:

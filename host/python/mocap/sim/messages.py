@@ -57,10 +57,7 @@ def delivered(t: Take) -> tuple[Take, list]:
     RuntimeError when the path did not deliver every frame whole: the simulated studio has
     no late or lost input, so that is a fault of the simulator or of the path."""
     path = _core.InputPath(t.rig, t.imus, t.layout, _core.SyncOptions(), _core.SolverOptions().min_confidence)
-    frames = host_frames.synchronise(path, messages(t))
-    if [f.time_ns for f in frames] != frame_times_ns(t) or path.dropped:
-        raise RuntimeError(f"the input path delivered {len(frames)} of the take's {len(t.times)} frames "
-                           f"(dropped: {dict(path.dropped)})")
+    frames = host_frames.synchronise_all(path, messages(t), frame_times_ns(t))
     cams, k, m = len(t.rig.cameras), len(t.layout), len(t.imus)
     keypoints, quats, accs = [], np.full((len(frames), m, 4), np.nan), np.full((len(frames), m, 3), np.nan)
     for i, frame in enumerate(frames):
