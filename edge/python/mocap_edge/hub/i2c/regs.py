@@ -1,0 +1,78 @@
+"""The ICM-42688-P registers the hub's driver and its fake use: the names and values of
+firmware/drivers/icm42688_regs.h (and of icm42688.h) without the ``ICM42688_`` prefix (a test
+parses those headers and fails when one differs). Bank 0 unless said; sensor data and
+FIFO_COUNT big-endian."""
+
+ADDRESS_AD0_LOW = 0x68  # 7-bit I2C address, AD0 low
+ADDRESS_AD0_HIGH = 0x69
+FIFO_CAPACITY_SAMPLES = 128  # 2048-byte FIFO / 16-byte packets
+READ_BURST_SAMPLES = 16  # packets per bus transfer of the FIFO
+
+WHO_AM_I_VALUE = 0x47
+
+REG_BANK_SEL = 0x76  # every bank
+
+REG_DEVICE_CONFIG = 0x11
+DEVICE_CONFIG_SOFT_RESET = 0x01
+REG_FIFO_CONFIG = 0x16
+FIFO_CONFIG_BYPASS = 0x00
+FIFO_CONFIG_STREAM = 0x40
+FIFO_CONFIG_MODE_MASK = 0xC0
+REG_INT_STATUS = 0x2D  # cleared by reading
+INT_STATUS_RESET_DONE = 0x10
+INT_STATUS_DATA_RDY = 0x08
+INT_STATUS_FIFO_THS = 0x04
+INT_STATUS_FIFO_FULL = 0x02
+REG_FIFO_COUNTH = 0x2E
+REG_FIFO_COUNTL = 0x2F
+REG_FIFO_DATA = 0x30  # reads pop the FIFO; the address does not advance
+REG_SIGNAL_PATH_RESET = 0x4B
+SIGNAL_PATH_RESET_FIFO_FLUSH = 0x02
+REG_INTF_CONFIG0 = 0x4C
+INTF_CONFIG0_FIFO_COUNT_REC = 0x40  # FIFO_COUNT in packets
+INTF_CONFIG0_FIFO_COUNT_BIG = 0x20
+INTF_CONFIG0_DATA_BIG = 0x10
+INTF_CONFIG0_SPI_DISABLE = 0x02
+INTF_CONFIG0_RESET = 0x30
+REG_PWR_MGMT0 = 0x4E
+PWR_MGMT0_GYRO_LN = 0x0C
+PWR_MGMT0_ACCEL_LN = 0x03
+REG_GYRO_CONFIG0 = 0x4F  # FS_SEL bits 7:5, ODR bits 3:0
+REG_ACCEL_CONFIG0 = 0x50
+CONFIG0_FS_SHIFT = 5
+CONFIG0_ODR_MASK = 0x0F
+REG_FIFO_CONFIG1 = 0x5F
+FIFO_CONFIG1_TEMP_EN = 0x04
+FIFO_CONFIG1_GYRO_EN = 0x02
+FIFO_CONFIG1_ACCEL_EN = 0x01
+REG_FIFO_LOST_PKT0 = 0x6C  # little-endian, then FIFO_LOST_PKT1
+REG_WHO_AM_I = 0x75
+
+# GYRO_CONFIG0 / ACCEL_CONFIG0 ODR codes (low-noise mode)
+ODR_8KHZ = 0x03
+ODR_4KHZ = 0x04
+ODR_2KHZ = 0x05
+ODR_1KHZ = 0x06
+ODR_200HZ = 0x07
+ODR_100HZ = 0x08
+ODR_50HZ = 0x09
+ODR_25HZ = 0x0A
+ODR_500HZ = 0x0F
+
+# FIFO packet 3: header, accel x y z, gyro x y z (BE int16), temperature (int8), timestamp (BE uint16)
+FIFO_PACKET_BYTES = 16
+FIFO_BYTES = 2048
+FIFO_HEADER_EMPTY = 0x80
+FIFO_HEADER_ACCEL = 0x40
+FIFO_HEADER_GYRO = 0x20
+FIFO_HEADER_TMST_ODR = 0x08
+FIFO_HEADER_KIND_MASK = 0xF0
+FIFO_HEADER_PACKET3 = FIFO_HEADER_ACCEL | FIFO_HEADER_GYRO
+
+RAW_INVALID = -32768  # a sensor without data yet (starting up)
+
+# Derived (not in the header): Hz -> ODR code; FS_SEL 0..3 halve the largest range.
+ODR_CODES = {25: ODR_25HZ, 50: ODR_50HZ, 100: ODR_100HZ, 200: ODR_200HZ, 500: ODR_500HZ,
+             1000: ODR_1KHZ, 2000: ODR_2KHZ, 4000: ODR_4KHZ, 8000: ODR_8KHZ}
+ACC_RANGES_G = (16, 8, 4, 2)  # index: FS_SEL
+GYRO_RANGES_DPS = (2000, 1000, 500, 250)
