@@ -2,30 +2,25 @@
        [--realtime] [--trigger CHIP:LINE --exposure-mid-us US]
    python -m mocap_edge camera --source sim:STREAMS --camera ID --bind ENDPOINT --start-ns T [--seed S]
        [--stop FROM_S TO_S]                                            (a box of the simulated studio)
-   python -m mocap_edge imu-hub --can URI --config hub.toml --bind ENDPOINT [--duration S]
-                                                   (the IMU hub: sensor nodes on a CAN bus)
-   python -m mocap_edge imu-hub --streams STREAMS --bind ENDPOINT --start-ns T
-                                                   (the simulated studio's IMUs, replayed from its stream file)"""
+   python -m mocap_edge imu-hub [--can URI] [--i2c URI] --config hub.toml --bind ENDPOINT [--duration S]
+                                                   (the IMU hub: sensor nodes on CAN, IMUs on its I2C)
+   python -m mocap_edge sim-nodes --streams STREAMS --config hub.toml --port PORT --start-ns T
+       [--stop FROM_S TO_S --stop-sensor S]        (the simulated studio's IMUs as sensor nodes, served
+                                                    for a hub's --can socketcand:127.0.0.1:PORT:can0)"""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
 import math
-import signal
 import sys
 import time
 
-import can
-
-from mocap_edge import camera_box, imu_hub, pacing
+from mocap_edge import camera_box, pacing
 from mocap_edge.detect.base import Detector, open_detector
 from mocap_edge.errors import EdgeError, TriggerError
-from mocap_edge.hub.can_bus import open_bus
-from mocap_edge.hub.hub import Hub, HubConfig
-from mocap_edge.hub.service import HubService, publisher
+from mocap_edge.hub import command as hub_command
 from mocap_edge.sources.base import open_source
-from mocap_edge.streams import Streams
 from mocap_edge.trigger import GpiodTrigger, TriggerPairing
 
 Span = tuple[float, float]  # from_s, to_s of the take
@@ -34,8 +29,8 @@ Span = tuple[float, float]  # from_s, to_s of the take
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="mocap_edge", description="an edge box: a camera box (a real camera, a "
                                 "video, or a camera of the simulated studio) or an IMU hub (sensor nodes on CAN, "
-                                "or the simulated studio's IMUs replayed)")
-    p.add_argument("role", choices=["camera", "imu-hub"])
+                                "or the simulated studio's IMUs as sensor nodes)")
+    p.add_argument("role", choices=["camera", "imu-hub", "sim-nodes"])
     p.add_argument("--source", help="role camera: the frame source, e.g. libcamera:0, v4l2:/dev/video0, "
                    "video:cam01.mp4, images:DIR (with --fps), fake:, sim:STREAMS (a camera of the simulated studio)")
     p.add_argument("--fps", type=float, default=None, help="frame rate of an images: source")
@@ -49,18 +44,21 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--exposure-mid-us", type=float, default=0.0,
                    help="with --trigger: trigger edge to mid-exposure (sensor delay + exposure / 2), microseconds")
     p.add_argument("--can", help="role imu-hub: the sensor nodes' CAN bus: socketcan:can0, slcan:socket://HOST:PORT, "
-                   "slcan:/dev/ttyACM0 or virtual:NAME")
-    p.add_argument("--config", help="role imu-hub with --can: hub.toml (node ids -> sensor names, rate, ranges)")
-    p.add_argument("--duration", type=float, default=0.0, help="role imu-hub with --can: stop after this many s")
-    p.add_argument("--streams", help="role imu-hub: stream file of the simulated studio (.npz, mocap_edge.streams)")
-    p.add_argument("--bind", required=True, help="ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
+                   "slcan:/dev/ttyACM0, socketcand:HOST:PORT:CHANNEL or virtual:NAME")
+    p.add_argument("--i2c", help="role imu-hub: the hub's own I2C bus with the IMUs of hub.toml's [i2c]: "
+                   "/dev/i2c-1 or i2c:1 (fake: a simulated chip at 0x68)")
+    p.add_argument("--config", help="roles imu-hub and sim-nodes: hub.toml (node ids -> sensor names, rate, ranges)")
+    p.add_argument("--duration", type=float, default=0.0, help="role imu-hub: stop after this many s")
+    p.add_argument("--streams", help="role sim-nodes: stream file of the simulated studio (.npz, mocap_edge.streams)")
+    p.add_argument("--port", type=int, help="role sim-nodes: TCP port to serve the nodes on (socketcand protocol)")
+    p.add_argument("--bind", help="roles camera and imu-hub: ZeroMQ endpoint to publish on, e.g. tcp://*:5601")
     p.add_argument("--start-ns", type=int, default=None, help="take start on the shared timebase (ns; default now): "
                    "the capture time of a file's, fake or simulated source's first frame")
     p.add_argument("--camera", default="cam0", help="camera id (role camera; with sim:, the stream file's camera)")
     p.add_argument("--stop", nargs=2, type=float, metavar=("FROM_S", "TO_S"),
                    help="unplug during this span of the take: a sim: camera box (its socket closed, bound again "
-                   "after), or the imu hub's --stop-sensor")
-    p.add_argument("--stop-sensor", help="sensor silenced during --stop (role imu-hub)")
+                   "after), or sim-nodes' --stop-sensor")
+    p.add_argument("--stop-sensor", help="role sim-nodes: the sensor whose node is unplugged during --stop")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated detection latency (sim: model)")
     return p
 
@@ -70,46 +68,20 @@ def main(argv: list[str] | None = None) -> int:
     a = p.parse_args(argv)
     if a.start_ns is None:
         a.start_ns = time.time_ns()
-    if a.role == "camera" and not a.source:
-        p.error("role camera needs --source (sim:STREAMS for a camera of the simulated studio)")
-    if a.role == "imu-hub" and bool(a.can) == bool(a.streams):
-        p.error("role imu-hub needs --can URI (with --config hub.toml) or --streams (a stream file to replay)")
-    if a.can and not a.config:
-        p.error("--can needs --config hub.toml (which node is which sensor)")
+    missing = {"camera": ["source", "bind"], "imu-hub": ["config", "bind"],
+               "sim-nodes": ["streams", "config", "port"]}[a.role]
+    if any(getattr(a, m) is None for m in missing):
+        p.error(f"role {a.role} needs {', '.join('--' + m for m in missing)}")
     try:
-        return _camera(a) if a.role == "camera" else _imu_hub(a)
+        if a.role == "imu-hub":
+            return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration)
+        if a.role == "sim-nodes":
+            unplugged = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
+            return hub_command.sim_nodes(a.streams, a.config, a.port, a.start_ns, a.seed, unplugged)
+        return _camera(a)
     except EdgeError as e:
         print(f"mocap_edge: {e}", file=sys.stderr)
         return 1
-
-
-def _imu_hub(a: argparse.Namespace) -> int:
-    if a.can:
-        return _can_hub(a)
-    stop = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
-    n = imu_hub.run(Streams.load(a.streams), a.bind, a.start_ns, stop_sensor=stop)
-    print(f"imu hub: {n} batches sent", file=sys.stderr)
-    return 0
-
-
-def _can_hub(a: argparse.Namespace) -> int:
-    """The hub on a CAN bus until SIGINT/SIGTERM (or --duration)."""
-    config = HubConfig.load(a.config)
-    port = open_bus(a.can)
-    publish, socket = publisher(a.bind)
-    stopping = []
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stopping.append(True))
-    try:
-        service = HubService(port, Hub(config), publish)
-        n = service.run(lambda: bool(stopping), a.duration)
-    finally:
-        with contextlib.suppress(can.CanError):  # an adapter already gone cannot be closed cleanly
-            port.bus.shutdown()
-        socket.close()
-    print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "
-          f"bus errors {dict(service.bus_errors)}", file=sys.stderr)
-    return 0
 
 
 def _camera(a: argparse.Namespace) -> int:

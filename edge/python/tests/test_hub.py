@@ -9,9 +9,10 @@ from mocap.net import wire
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.can_db import Database
 from mocap_edge.hub.clock_fit import NodeClock, upper_envelope_line
-from mocap_edge.hub.hub import Hub, HubConfig
-from mocap_edge.hub.sim_bus import BusConditions, SimulatedBus, make_nodes
-from mocap_edge.hub.sim_clock import NodeOscillator, sample_errors_us
+from mocap_edge.hub.config import HubConfig
+from mocap_edge.hub.hub import Hub
+from mocap_edge.hub.sim.bus import BusConditions, SimulatedBus, make_nodes
+from mocap_edge.hub.sim.clock import NodeOscillator, sample_errors_us
 
 NAMES = {3: "pelvis", 7: "forearm_l", 12: "foot_r"}
 
@@ -113,6 +114,21 @@ def test_samples_come_out_on_the_hubs_clock_with_their_orientation():
     assert counts.lost == 0 and counts.unpaired == 0 and counts.samples + counts.unsynced == 4 * 60
 
 
+def test_health_reports_how_late_samples_reach_the_hub():
+    """The simulated nodes queue each sample 0-2 ms before it leaves (sim.bus): the hub's
+    Health reports that delay's p50 / p99 per node, and counts as late the samples beyond
+    late_ms."""
+    hub, bus = run(seconds=3.0)
+    streams = {s.stream: s for s in hub.health(int(3e9)).streams}
+    pelvis = streams["imu/pelvis"]
+    assert 0.5 < pelvis.latency_p50_ms < 1.6 and 1.5 < pelvis.latency_p99_ms < 2.4 and pelvis.late == 0
+    strict = Hub(HubConfig(dict(NAMES), late_ms=1.0))
+    SimulatedBus(strict, make_nodes(list(NAMES), np.random.default_rng(0), 60), motion=turning).run(0.0, 3.0)
+    late = {s.stream: s.late for s in strict.health(int(3e9)).streams}
+    assert 0.3 < late["imu/pelvis"] / strict.nodes[3].counts.samples < 0.7  # about half beyond 1 ms
+    assert np.isnan(strict.health(int(4e9)).streams[0].latency_p50_ms)  # nothing since the last report
+
+
 def test_an_unplugged_node_goes_stale_and_rejoins_and_its_gap_is_counted_lost():
     hub, bus = run(seconds=3.5, silent={7: [(2.0, 4.0)]})
     assert [n.id for n in hub.stale(int(3.5e9))] == [7]
@@ -194,7 +210,7 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
 
     from mocap_edge.hub.can_bus import open_bus
     from mocap_edge.hub.service import HubService
-    from mocap_edge.hub.sim_runner import NodeRunner
+    from mocap_edge.hub.sim.runner import NodeRunner
 
     hub_port, nodes_port = open_bus("virtual:test_hub_live"), open_bus("virtual:test_hub_live", own_messages=False)
     start = time.time_ns()
@@ -240,8 +256,9 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
 
 def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
     """python-can raises CanOperationError when the controller is bus-off (SocketCAN: ENETDOWN
-    / ENOBUFS) or the adapter's link fails, and hands error frames over as messages; the
-    virtual bus makes none of them."""
+    / ENOBUFS) or the adapter's link fails, and hands SocketCAN's error frames over as messages
+    (the error class in the id: linux/can/error.h); the virtual bus makes none of them. Each
+    bus-off and each recovery is counted once, and reported in the hub's Health."""
     import can
 
     from mocap_edge.hub.can_bus import CanPort
@@ -250,26 +267,32 @@ def test_bus_off_and_error_frames_are_counted_and_the_hub_goes_on():
     class FailingBus(can.BusABC):
         def __init__(self):
             super().__init__(channel="failing")
-            self.sends, self.clock = 0, 0
+            self.sends = self.receives = 0
 
         def send(self, msg, timeout=None):
             self.sends += 1
-            if 3 <= self.sends < 8:
+            if 3 <= self.sends < 8:  # bus-off: five Syncs refused, then the controller restarted
                 raise can.CanOperationError("Transmit failed: bus off")
 
         def _recv_internal(self, timeout):
-            self.receives = getattr(self, "receives", 0) + 1
+            self.receives += 1
             if self.receives == 5:  # the adapter's socket went away once
                 raise can.CanOperationError("Could not read from serial device")
-            return can.Message(is_error_frame=True, timestamp=1.0), False
+            error_class = {30: 0x040, 40: 0x100}.get(self.receives, 0x004)  # bus-off, restarted, controller
+            return can.Message(is_error_frame=True, arbitration_id=error_class, timestamp=1.0), False
 
     clock = iter(range(0, 10**10, 5_000_000))  # 5 ms per reading
+    published = []
     service = HubService(CanPort(FailingBus(), echoes=False), Hub(HubConfig(dict(NAMES), sync_hz=100)),
-                         lambda batch: None, clock_ns=lambda: next(clock))
-    service.run(lambda: False, duration_s=0.2)
-    assert service.bus_errors["bus_off"] == 5 and service.bus_errors["error_frames"] > 10
-    assert service.bus_errors["receive_failed"] == 1
+                         published.append, clock_ns=lambda: next(clock))
+    service.run(lambda: False, duration_s=1.2)
+    counts = service.bus_errors.counts
+    assert counts["send_refused"] == 5 and counts["error_frames"] > 40 and counts["receive_failed"] == 1
+    assert counts["bus_off"] == 2 and counts["recoveries"] == 2 and not service.bus_errors.bus_off
     assert service.port.bus.sends > 8  # it kept sending Syncs after the bus came back
+    bus = [s for m in published if isinstance(m, wire.Health) for s in m.streams if s.stream == "bus"][-1]
+    assert (bus.bus_off, bus.bus_recoveries) == (2, 2) and 40 < bus.bus_errors <= service.bus_errors.total()
+    service.port.bus.shutdown()
 
 
 def test_the_hub_command_runs_until_told_to_stop(tmp_path):
@@ -300,3 +323,42 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def test_the_hub_command_publishes_its_own_i2c_imus(tmp_path):
+    """`--i2c fake:`: a simulated ICM-42688-P at 0x68 on the hub's own bus, no CAN bus at all."""
+    import subprocess
+    import sys
+    import time
+
+    import zmq
+
+    from mocap.net import transport
+
+    (tmp_path / "hub.toml").write_text('[hub]\nrate_hz = 100\n\n[i2c]\n"0x68" = "pelvis"\n')
+    endpoint = f"tcp://127.0.0.1:{free_port()}"
+    sub = transport.subscriber(zmq.Context.instance(), [endpoint])
+    process = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--i2c", "fake:", "--config",
+                                str(tmp_path / "hub.toml"), "--bind", endpoint, "--duration", "3"],
+                               stderr=subprocess.PIPE, text=True)
+    got = []
+    try:
+        deadline = time.monotonic() + 15
+        while process.poll() is None and time.monotonic() < deadline:
+            if sub.poll(100):
+                got.append(wire.decode(sub.recv_multipart()))
+        _, err = process.communicate(timeout=10)
+    finally:
+        sub.close(0)
+        process.kill()
+    assert process.returncode == 0 and "Traceback" not in err, err
+    samples = [s for m in got if isinstance(m, wire.ImuBatch) for s in m.samples]
+    times = np.array([s.sample_time_ns for s in samples])
+    assert {s.sensor_id for s in samples} == {"pelvis"} and len(samples) > 150 and np.all(np.diff(times) > 0)
+    assert np.median(np.diff(times)) == pytest.approx(1e7, rel=0.05)  # 100 Hz, on the hub's clock
+    assert abs(times[-1] - time.time_ns()) < 5e9
+    health = [s for m in got if isinstance(m, wire.Health) for s in m.streams if s.stream == "imu/pelvis"]
+    assert health and health[-1].active and health[-1].rate_hz == pytest.approx(100, rel=0.1)
+    missing = subprocess.run([sys.executable, "-m", "mocap_edge", "imu-hub", "--config", str(tmp_path / "hub.toml"),
+                              "--bind", endpoint], capture_output=True, text=True)
+    assert missing.returncode == 1 and "--i2c" in missing.stderr

@@ -1,6 +1,6 @@
 """The hub's benchmark (`mocap bench --only hub`): frames decoded per second on one core, the
 added latency from a sample's last frame reaching the hub to its ImuBatch leaving, and the
-clock fit's sample-time error — all on the simulated bus (mocap_edge.hub.sim_bus), so the
+clock fit's sample-time error — all on the simulated bus (mocap_edge.hub.sim.bus), so the
 figures do not depend on a CAN interface."""
 
 from __future__ import annotations
@@ -9,9 +9,10 @@ import time
 
 import numpy as np
 
-from mocap_edge.hub.hub import Hub, HubConfig
-from mocap_edge.hub.sim_bus import BusConditions, SimulatedBus, make_nodes
-from mocap_edge.hub.sim_clock import sample_errors_us
+from mocap_edge.hub.config import HubConfig
+from mocap_edge.hub.hub import Hub
+from mocap_edge.hub.sim.bus import BusConditions, SimulatedBus, make_nodes
+from mocap_edge.hub.sim.clock import sample_errors_us
 
 NODES = 17  # a saturated classic bus at 120 Hz (proto/can/README.md, "Bus load")
 
@@ -25,9 +26,9 @@ def decode_rate(seconds: float = 12.0) -> tuple[float, int]:
     bus.run(0.0, seconds)
     hub = Hub(HubConfig(names))
     start = time.perf_counter()
-    for kind, args in recorder.calls:
+    for k, (kind, args) in enumerate(recorder.calls):
         (hub.on_frame if kind == "frame" else hub.sync_sent)(*args)
-        if kind == "frame" and len(hub._pending) > 256:
+        if k % 512 == 511:  # a batch every ~5 ms of a saturated bus
             hub.take_batch(args[0])
     elapsed = time.perf_counter() - start
     frames = sum(1 for kind, _ in recorder.calls if kind == "frame")

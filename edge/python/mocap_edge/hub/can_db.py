@@ -39,8 +39,10 @@ class NodeFrame:
 
 
 class Database:
-    def __init__(self, path: Path = DBC):
-        self.db = cantools.database.load_file(str(path))
+    def __init__(self, path: Path = DBC, checked: bool = True):
+        """checked=False: `encode` skips cantools' range checks (half its cost), for senders whose
+        values are already in range (simulated nodes clip theirs as the firmware does)."""
+        self.db, self.checked = cantools.database.load_file(str(path)), checked
         self._by_base = {m.frame_id: m for m in self.db.messages}
 
     def decode(self, frame_id: int, data: bytes, extended: bool = False, remote: bool = False) -> NodeFrame:
@@ -63,7 +65,7 @@ class Database:
             signals = {"rate_hz": 0, "acc_range_g": 0, "gyro_range_dps": 0, "mode": 0, **signals}
             data = message.encode(signals, strict=False)
         else:
-            data = message.encode(signals)
+            data = message.encode(signals, strict=self.checked)
         return message.frame_id + node, bytes(data).ljust(message.length, b"\0")
 
     def sync(self, sequence: int) -> tuple[int, bytes]:

@@ -11,70 +11,18 @@ would not know what body segment they measure.
 from __future__ import annotations
 
 import collections
-import dataclasses
-import tomllib
-from pathlib import Path
+
+import numpy as np
 
 from mocap.net import wire
-from mocap_edge.errors import EdgeError
-from mocap_edge.hub import bus_budget
+
+from mocap_edge.hub.bus_errors import BusErrors
 from mocap_edge.hub.can_db import CanFrameError, Database
+from mocap_edge.hub.config import HubConfig
 from mocap_edge.hub.node import Node, Sample
 
 STATUS_ORIENTATION_INVALID = wire.ImuSample.STATUS_ORIENTATION_INVALID
 STATUS_ACCELERATION_CLIPPED = wire.ImuSample.STATUS_ACCELERATION_CLIPPED
-
-
-@dataclasses.dataclass
-class HubConfig:
-    """hub.toml: [hub] id, rate_hz, acc_range_g, gyro_range_dps, mode ("6d" or "9d"),
-    sync_hz, batch_ms, stale_s; [nodes] <node id> = "<sensor name>"."""
-    names: dict[int, str]
-    hub_id: str = "hub0"
-    rate_hz: int = 60
-    acc_range_g: int = 16
-    gyro_range_dps: int = 2000
-    mode: str = "6d"
-    sync_hz: float = 100.0  # Syncs per second: p99 sample-time error 17 µs after 2 s (50: 31 µs; make bench)
-    batch_ms: float = 10.0
-    stale_s: float = 1.0  # a node silent this long is reported stale
-
-    def __post_init__(self):
-        """EdgeError for a value the nodes refuse, or a bus loaded above bus_budget.MAX_LOAD."""
-        problems = [what for bad, what in (
-            (not 1 <= self.rate_hz <= 400, f"rate_hz {self.rate_hz} is not 1..400"),
-            (self.acc_range_g not in (2, 4, 8, 16), f"acc_range_g {self.acc_range_g} is not 2, 4, 8 or 16"),
-            (self.gyro_range_dps not in (250, 500, 1000, 2000),
-             f"gyro_range_dps {self.gyro_range_dps} is not 250, 500, 1000 or 2000"),
-            (self.mode not in ("6d", "9d"), f"mode {self.mode!r} is not \"6d\" or \"9d\""),
-            (not self.sync_hz > 0 or not self.batch_ms > 0 or not self.stale_s > 0,
-             "sync_hz, batch_ms and stale_s are > 0")) if bad]
-        load = bus_budget.check(len(self.names), self.rate_hz, self.sync_hz) if not problems else None
-        if problems or load:
-            raise EdgeError(f"hub configuration: {problems[0] if problems else load}")
-
-    @classmethod
-    def load(cls, path: Path) -> HubConfig:
-        try:
-            data = tomllib.loads(Path(path).read_text())
-        except (OSError, tomllib.TOMLDecodeError) as e:
-            raise EdgeError(f"{path}: {e}") from None
-        hub, nodes = data.get("hub", {}), data.get("nodes", {})
-        known = {f.name for f in dataclasses.fields(cls)} - {"names"} | {"id"}
-        unknown = sorted(set(hub) - known) + sorted(set(data) - {"hub", "nodes"})
-        if unknown:
-            raise EdgeError(f"{path}: unknown key {unknown[0]!r}")
-        try:
-            names = {int(k): str(v) for k, v in nodes.items()}
-        except ValueError:
-            raise EdgeError(f"{path}: [nodes] keys are node ids 1..63") from None
-        if any(not 1 <= k <= 63 for k in names) or len(set(names.values())) != len(names):
-            raise EdgeError(f"{path}: [nodes]: node ids 1..63, each sensor name once")
-        settings = {("hub_id" if k == "id" else k): v for k, v in hub.items()}
-        try:
-            return cls(names, **settings)
-        except EdgeError as e:
-            raise EdgeError(f"{path}: {e}") from None
 
 
 class Hub:
@@ -84,6 +32,9 @@ class Hub:
         self.dropped: collections.Counter[str] = collections.Counter()
         self._syncs: dict[int, int] = {}  # sync_seq -> the hub's transmit time
         self._pending: list[wire.ImuSample] = []
+        self._waiting: set[int] = set()  # nodes with a sample in _pending
+        self._last_sample_ns: dict[int, int] = {}  # node id -> arrival of its latest sample
+        self._delays: dict[int, list[int]] = {}  # node id -> arrival - sample time since the last Health
         self._sequence = 0
         self.frames = 0  # frames received
         self._health_ns: int | None = None  # the previous Health report's time
@@ -108,6 +59,22 @@ class Hub:
         handler = getattr(self, f"_on_{frame.name}")
         return handler(node, frame.signals, arrival_ns)
 
+    def round_complete(self, now_ns: int) -> bool:
+        """Every named node that is sampling (a sample arrived within its last 3 periods) has a
+        sample waiting: the nodes sample together, so the round's batch can leave now rather
+        than at the end of the batch period."""
+        if not self._waiting:
+            return False
+        for node_id, arrived in self._last_sample_ns.items():
+            node = self.nodes[node_id]
+            if node_id not in self._waiting and node.rate_hz > 0 and now_ns - arrived < 3e9 / node.rate_hz:
+                return False
+        return True
+
+    def add_samples(self, samples: list[wire.ImuSample]) -> None:
+        """Samples timed elsewhere (the hub's I2C IMUs), for the next batch."""
+        self._pending.extend(samples)
+
     def take_batch(self, now_ns: int) -> wire.ImuBatch | None:
         """The samples timed since the last batch, as one ImuBatch sent at now_ns (None: none)."""
         if not self._pending:
@@ -115,6 +82,7 @@ class Hub:
         batch = wire.ImuBatch(hub_id=self.config.hub_id, sequence=self._sequence, send_time_ns=now_ns)
         batch.samples.extend(self._pending)
         self._pending, self._sequence = [], self._sequence + 1
+        self._waiting.clear()
         return batch
 
     def stale(self, now_ns: int) -> list[Node]:
@@ -124,11 +92,12 @@ class Hub:
         return [self.nodes.get(i) or Node(i, name) for i, name in self.config.names.items()
                 if heard.get(i) is None or now_ns - heard[i] > limit]
 
-    def health(self, now_ns: int, bus_errors: int = 0) -> wire.Health:
+    def health(self, now_ns: int, bus: BusErrors | None = None) -> wire.Health:
         """The hub's Health (source: its id): per named node "imu/<sensor>" (active unless
         stale; samples per second since the previous report; samples, losses, unpaired frames
-        as duplicates, the clock fit's residual) and "bus" (frames received, bad frames as
-        malformed, bus errors)."""
+        as duplicates, samples that reached the hub more than late_ms after they were taken as
+        late, that delay's p50 / p99 over the period, the clock fit's residual) and "bus"
+        (frames received, bad frames as malformed, bus errors, bus-off and recoveries)."""
         health = wire.Health(source=self.config.hub_id, time_ns=now_ns)
         period_s = (now_ns - self._health_ns) * 1e-9 if self._health_ns is not None else 0.0
         stale = {n.id for n in self.stale(now_ns)}
@@ -137,12 +106,16 @@ class Hub:
             c = node.counts
             rate = (c.samples - self._reported.get(node_id, 0)) / period_s if period_s > 0 else 0.0
             self._reported[node_id] = c.samples
+            delays = np.array(self._delays.pop(node_id, [np.nan])) * 1e-6
             health.streams.add(stream=f"imu/{name}", active=node_id not in stale, rate_hz=rate, received=c.samples,
-                               dropped=c.unsynced + c.unpaired, duplicates=c.unpaired, lost=c.lost,
-                               clock_residual_us=node.clock.residual_us)
+                               dropped=c.unsynced + c.unpaired, duplicates=c.unpaired, lost=c.lost, late=c.late,
+                               latency_p50_ms=float(np.percentile(delays, 50)),
+                               latency_p99_ms=float(np.percentile(delays, 99)), clock_residual_us=node.clock.residual_us)
         bad = sum(self.dropped.values())
+        bus = bus or BusErrors()
         health.streams.add(stream="bus", active=True, received=self.frames, malformed=bad, dropped=bad,
-                           bus_errors=bus_errors)
+                           bus_errors=bus.total(), bus_off=bus.counts["bus_off"],
+                           bus_recoveries=bus.counts["recoveries"])
         self._health_ns = now_ns
         return health
 
@@ -170,6 +143,11 @@ class Hub:
             self.dropped["unnamed"] += 1
             return False
         self._pending.append(_wire_sample(node.name, sample))
+        delay = arrival_ns - sample.time_ns
+        self._delays.setdefault(node.id, []).append(delay)
+        node.counts.late += delay > self.config.late_ms * 1e6
+        self._waiting.add(node.id)
+        self._last_sample_ns[node.id] = arrival_ns
         return True
 
     def _on_CommandReply(self, node: Node, signals: dict, arrival_ns: int) -> bool:

@@ -40,6 +40,7 @@ class NodeCounts:
     lost: int = 0  # gaps in the sample counter
     unpaired: int = 0  # an ImuQuat without its ImuAccel, or the reverse (lost, duplicated or reordered)
     unsynced: int = 0  # samples before the node's clock was fitted
+    late: int = 0  # samples that reached the hub more than the hub's late_ms after they were taken
     heartbeats: int = 0
     reboots: int = 0  # the node rebooted (its heartbeat went back to the boot state)
     clock_restarts: int = 0  # its clock fit started again (its timer jumped: a reboot missed by heartbeats)

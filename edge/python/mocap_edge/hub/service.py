@@ -1,20 +1,21 @@
 """The hub running: Syncs sent on the bus at sync_hz, every received frame fed to the hub's core
 (mocap_edge.hub.hub) with its receive timestamp, each node configured when it is discovered
-(stop, rate, ranges, mode, start, as hub.toml says), and an ImuBatch published every batch
-period. Bus errors (an error frame, a send refused: bus-off, a full queue) are counted and the
-loop goes on: python-can raises them, the kernel (SocketCAN's restart-ms) or the adapter
-recovers the bus.
+(stop, rate, ranges, mode, start, as hub.toml says), the IMUs on the hub's own I2C bus polled,
+and an ImuBatch published as soon as every sampling node's sample of a round is in (nodes on
+CAN only), at the latest every batch period. Bus errors (an error frame, a send refused:
+bus-off, a full queue) are counted (bus_errors) and the loop goes on: python-can raises them,
+the kernel (SocketCAN's restart-ms) or the adapter recovers the bus.
 """
 
 from __future__ import annotations
 
-import collections
 import time
 
 import can
 import zmq
-
 from mocap.net import transport, wire
+
+from mocap_edge.hub.bus_errors import BusErrors
 from mocap_edge.hub.can_bus import CanPort
 from mocap_edge.hub.hub import Hub
 
@@ -25,37 +26,67 @@ HEALTH_NS = 1_000_000_000  # a Health report every second
 
 
 class HubService:
-    def __init__(self, port: CanPort, hub: Hub, publish, clock_ns=time.time_ns):
+    def __init__(self, port: CanPort | None, hub: Hub, publish, clock_ns=time.time_ns, local: list | None = None):
         """publish(message) sends an ImuBatch or the hub's Health; clock_ns is the hub's clock
-        (the shared timebase)."""
+        (the shared timebase). port None: no CAN bus; local: the IMUs on the hub's own I2C bus
+        (mocap_edge.hub.i2c.I2cImu, timed on clock_ns), polled every batch period."""
         self.port, self.hub, self.publish, self.clock_ns = port, hub, publish, clock_ns
-        self.bus_errors: collections.Counter[str] = collections.Counter()
+        self.local = local or []
+        self._local_reported: dict[str, tuple[int, int | None]] = {}
+        self.bus_errors = BusErrors()
         self.configured: dict[int, int] = {}  # node id -> its reboots when it was configured
         self._sync_seq = 0
 
     def run(self, stop, duration_s: float = 0.0) -> int:
-        """Runs until stop() is true (or duration_s passed, if > 0); returns batches published."""
+        """Runs until stop() is true (or duration_s passed, if > 0); returns batches published.
+        A timer that fell behind (the hub was descheduled) restarts a period from now: no
+        burst of Syncs or empty batches to catch up."""
         c = self.hub.config
         sync_ns, batch_ns = int(1e9 / c.sync_hz), int(c.batch_ms * 1e6)
         start = now = self.clock_ns()
         next_sync, next_batch, next_health, published = now, now + batch_ns, now + HEALTH_NS, 0
         while not stop() and not (duration_s > 0 and now - start >= duration_s * 1e9):
-            if now >= next_sync:
+            if now >= next_sync and self.port is not None:
                 self._send_sync()
-                next_sync += sync_ns
-            self._drain(max(0.0, min(next_sync, next_batch) - self.clock_ns()) * 1e-9)
+                next_sync = _after(next_sync, sync_ns, now)
+            self._wait(max(0.0, min(next_sync if self.port else next_batch, next_batch) - self.clock_ns()) * 1e-9)
             now = self.clock_ns()
-            if now >= next_batch:
+            if now >= next_batch or (not self.local and self.hub.round_complete(now)):
+                for imu in self.local:
+                    self.hub.add_samples(imu.poll(now))
                 batch = self.hub.take_batch(now)
                 if batch is not None:
                     self.publish(batch)
                     published += 1
-                next_batch += batch_ns
-                self._configure_new_nodes()
+                if now >= next_batch:
+                    next_batch = _after(next_batch, batch_ns, now)
+                    self._configure_new_nodes()
             if now >= next_health:
-                self.publish(self.hub.health(now, sum(self.bus_errors.values())))
-                next_health += HEALTH_NS
+                health = self.hub.health(now, self.bus_errors)
+                self._local_health(health, now)
+                self.publish(health)
+                next_health = _after(next_health, HEALTH_NS, now)
         return published
+
+    def _wait(self, timeout_s: float) -> None:
+        """Feeds the CAN frames that arrive within timeout_s; sleeps it with no CAN bus."""
+        if self.port is not None:
+            self._drain(timeout_s)
+        else:
+            time.sleep(timeout_s)
+
+    def _local_health(self, health, now_ns: int) -> None:
+        """One stream per IMU on the hub's I2C bus, as for a node: active while it delivers,
+        its rate since the previous report, samples, losses (FIFO overflows), invalid packets
+        as malformed, failed transfers (NACKs) as bus errors."""
+        for imu in self.local:
+            c = imu.counts
+            before, at = self._local_reported.get(imu.name, (0, None))
+            rate = (c.published - before) / ((now_ns - at) * 1e-9) if at is not None and now_ns > at else 0.0
+            self._local_reported[imu.name] = (c.published, now_ns)
+            health.streams.add(stream=f"imu/{imu.name}", active=imu.running and c.published > before,
+                               rate_hz=rate, received=c.published, lost=c.lost, malformed=c.invalid,
+                               dropped=c.invalid, bus_errors=c.nacks)
 
     def _drain(self, timeout_s: float) -> None:
         """Feeds what is waiting (up to DRAIN frames, waiting at most timeout_s for the first).
@@ -71,27 +102,31 @@ class HubService:
             if message is not None:
                 self._receive(message)
         except can.CanOperationError:
-            self.bus_errors["receive_failed"] += 1
+            self.bus_errors.receive_failed()
             time.sleep(RETRY_S)
 
     def _send(self, frame_id: int, data: bytes) -> bool:
         try:
             self.port.bus.send(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False), timeout=0.01)
-            return True
-        except can.CanOperationError as e:
-            self.bus_errors["send_refused"] += 1
-            self.bus_errors["bus_off" if "off" in str(e).lower() else "send_failed"] += 1
+        except (can.CanOperationError, OSError) as e:  # socketcand's socket raises OSError
+            self.bus_errors.send_refused(e)
             return False
+        self.bus_errors.send_succeeded()
+        return True
 
     def _send_sync(self) -> None:
         seq = self._sync_seq
         self._sync_seq = (self._sync_seq + 1) % 256
+        # Without an echo, the time just before the send: the frame cannot leave earlier, so
+        # every pair stays on or below the node's line (a stamp taken after the send returned
+        # is late by however long the hub was descheduled, and such a pair lifts the envelope).
+        before_ns = self.clock_ns()
         if self._send(*self.hub.db.sync(seq)) and not self.port.echoes:
-            self.hub.sync_sent(seq, self.clock_ns())  # else its transmit time comes with its echo
+            self.hub.sync_sent(seq, before_ns)  # else its transmit time comes with its echo
 
     def _receive(self, message: can.Message) -> None:
         if message.is_error_frame:
-            self.bus_errors["error_frames"] += 1
+            self.bus_errors.error_frame(message)
             return
         stamp = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
         if not message.is_rx:  # our own frame, echoed: a Sync's echo is its transmit time
@@ -115,6 +150,11 @@ class HubService:
                                   ("set_mode", {"mode": 1 if c.mode == "9d" else 0}), ("start", {})):
                 self._send(*self.hub.db.command(node.id, command, **args))
             self.configured[node.id] = node.counts.reboots
+
+
+def _after(due_ns: int, period_ns: int, now_ns: int) -> int:
+    """The timer's next time: a period on, or a period from now when it fell behind."""
+    return due_ns + period_ns if due_ns + period_ns > now_ns else now_ns + period_ns
 
 
 def publisher(endpoint: str):

@@ -38,13 +38,24 @@ def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple |
     return cmd
 
 
-def _imu_hub_command(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[str]:
-    """The IMU hub; unplugged (sensor id, from_s, to_s): that sensor stops during the span."""
-    cmd = [sys.executable, "-m", "mocap_edge", "imu-hub", "--streams", str(studio.streams),
-           "--bind", studio.endpoints["hub0"], "--start-ns", str(start_ns)]
+def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
+    """The studio's IMUs as sensor nodes (`mocap_edge sim-nodes`, served as a CAN bus over TCP)
+    and the IMU hub reading them (`mocap_edge imu-hub --can socketcand:...`), started in that
+    order: the hub connects once the nodes listen. unplugged (sensor id, from_s, to_s): that
+    sensor's node is unplugged during the span."""
+    nodes_cmd = [sys.executable, "-m", "mocap_edge", "sim-nodes", "--streams", str(studio.streams),
+                 "--config", str(studio.hub_config), "--port", "0", "--start-ns", str(start_ns)]
     if unplugged:
-        cmd += ["--stop-sensor", unplugged[0], "--stop", *map(str, unplugged[1:])]
-    return cmd
+        nodes_cmd += ["--stop-sensor", unplugged[0], "--stop", *map(str, unplugged[1:])]
+    nodes = subprocess.Popen(nodes_cmd, stdout=subprocess.PIPE, text=True)
+    listening = nodes.stdout.readline().split()  # "listening PORT"
+    if len(listening) != 2:
+        nodes.kill()
+        raise InputError(f"the simulated sensor nodes did not start (status {nodes.wait()}; their log is above)")
+    hub = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can",
+                            f"socketcand:127.0.0.1:{listening[1]}:can0", "--config", str(studio.hub_config),
+                            "--bind", studio.endpoints["hub0"]])
+    return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
 def _calibrator_command(studio: Studio, duration: float) -> list[str]:
@@ -115,10 +126,10 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
                              "--quiet"], stdout=subprocess.PIPE, text=True)
     commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
-    commands.append(_imu_hub_command(studio, start_ns, faults.get("imu")))
     if studio.calibrator:
         commands.append(_calibrator_command(studio, duration))
     edge = [subprocess.Popen(cmd) for cmd in commands]
+    edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
     recording = subprocess.Popen(_recorder_command(studio, record, duration)) if record else None
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]])
     try:

@@ -25,9 +25,14 @@ from mocap.model.solver import imu_set_json
 from mocap.sim import demo_motion
 from mocap.sim import take as sim_take
 from mocap_edge import offline
+from mocap_edge.hub.sim.studio import studio_config
 from mocap_edge.streams import Streams
 
 IMU_RATE = 100.0  # Hz
+# mocapd's wait for a frame's inputs: the IMUs' next sample (up to a period, 10 ms) crosses the
+# simulated CAN bus, the hub and ZeroMQ, on two cores shared by a dozen processes; with 25 ms,
+# 6 frames in 1,200 were handed over before the last IMU's sample arrived (20 s demo).
+MAX_WAIT_MS = 35.0
 
 
 @dataclasses.dataclass
@@ -49,6 +54,11 @@ class Studio:
     def calibrated(self) -> Path:
         """Where the live calibrator writes the session of its latest calibration."""
         return self.session.parent / "calibrated"
+
+    @property
+    def hub_config(self) -> Path:
+        """The IMU hub's hub.toml: which simulated sensor node is which IMU."""
+        return self.session.parent / "hub.toml"
 
 
 def calibrate(session: Path, streams: Path, detect_every: tuple[int, int]) -> _core.Skeleton:
@@ -122,13 +132,14 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     folder.mkdir(parents=True, exist_ok=True)
     skeleton, thetas, t, streams = _simulate(seconds, preset, cameras, np.random.default_rng(seed), still_s)
     streams.save(folder / "streams.npz")
+    (folder / "hub.toml").write_text(studio_config(streams).to_toml())
     camera_ids = streams.camera_ids
     ports = free_ports(len(camera_ids) + 3)
     endpoints = {c: f"tcp://127.0.0.1:{p}" for c, p in zip([*camera_ids, "hub0", "host", "calibrator"], ports)}
     session_skeleton, layout = _calibration_files(folder, calibration, skeleton, t, streams, preset)
     inputs = [endpoints[c] for c in [*camera_ids, "hub0", *(["calibrator"] if calibration == "live" else [])]]
     session = Session("skeleton.json", "rig.json", layout, "imus.json", inputs, endpoints["host"],
-                      prior=str(paths.HOST_DATA / "prior_default.json"), sync=SyncSettings(),
+                      prior=str(paths.HOST_DATA / "prior_default.json"), sync=SyncSettings(max_wait_ms=MAX_WAIT_MS),
                       solver={} if calibration == "oracle" else {"heading_time_constant": window.HEADING_TIME_CONSTANT_S},
                       imus_calibrated=calibration != "live")
     detect_every = (sim_take.PRESETS[preset].period, sim_take.PRESETS[preset].burst)

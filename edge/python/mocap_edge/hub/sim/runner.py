@@ -11,8 +11,8 @@ import time
 import can
 import numpy as np
 
-from mocap_edge.hub.sim_bus import Motion
-from mocap_edge.hub.sim_node import SimulatedNode
+from mocap_edge.hub.sim.bus import Motion
+from mocap_edge.hub.sim.node import SimulatedNode
 
 
 class NodeRunner(threading.Thread):

@@ -1,5 +1,5 @@
 """A sensor node's side of the CAN protocol in software, for the hub's tests and the simulated
-studio: its own timer (sim_clock.NodeOscillator: offset, rate error, random walk), the
+studio: its own timer (sim.clock.NodeOscillator: offset, rate error, random walk), the
 SyncReport it answers each Sync with (the Sync's arrival on that timer), its heartbeats,
 its replies to commands, and its samples quantised as the CAN database quantises them.
 The frames are those the firmware sends (proto/can/README.md); `true_ns` is the instant on
@@ -13,7 +13,7 @@ import numpy as np
 from mocap_edge.hub.can_db import COMMANDS, Database
 from mocap_edge.hub.clock_fit import WRAP_US
 from mocap_edge.hub.node import LOW_BITS, SEQ
-from mocap_edge.hub.sim_clock import NodeOscillator
+from mocap_edge.hub.sim.clock import NodeOscillator
 
 Q_MAX = 8191 / 8192  # the largest quaternion component the 14-bit signals carry
 A_MAX = 255.984375  # m/s², the 15-bit signals' largest
@@ -28,14 +28,15 @@ class SimulatedNode:
         self.acc_range_g, self.gyro_range_dps, self.mode = 16, 2000, 0
         self.seq = 0
         self.synced_at_ns: int | None = None
+        self._sync_id, self._command_id = self.db.sync(0)[0], self.db.command(node_id, "start")[0]
 
     def on_frame(self, frame_id: int, data: bytes, true_ns: int) -> list[tuple[int, bytes]]:
         """The frames the node answers a frame from the hub with (received at true_ns)."""
-        if frame_id == self.db.sync(0)[0]:
+        if frame_id == self._sync_id:
             self.synced_at_ns = true_ns
             rx_us = int(np.floor(self.osc.advance(true_ns))) % WRAP_US
             return [self.db.encode("SyncReport", self.id, sync_seq=data[0], rx_time_us=rx_us)]
-        if frame_id == self.db.command(self.id, "start")[0]:
+        if frame_id == self._command_id:
             return [self._command(data)]
         return []
 

@@ -11,10 +11,11 @@ from collections.abc import Callable
 
 import numpy as np
 
+from mocap_edge.hub.can_db import Database
 from mocap_edge.hub.clock_fit import WRAP_US
 from mocap_edge.hub.hub import Hub
-from mocap_edge.hub.sim_clock import NodeOscillator
-from mocap_edge.hub.sim_node import SimulatedNode
+from mocap_edge.hub.sim.clock import NodeOscillator
+from mocap_edge.hub.sim.node import SimulatedNode
 
 FRAME_NS = 140_000  # an 8-byte classic frame at 1 Mbit/s, stuffing included
 Motion = Callable[[int, float], tuple[np.ndarray, np.ndarray]]  # (node id, t s) -> (w, x, y, z), acceleration
@@ -36,14 +37,16 @@ class BusConditions:
 def make_nodes(ids: list[int], rng: np.random.Generator, rate_hz: int = 60,
                conditions: BusConditions = BusConditions(), origin_ns: int = 0) -> dict[int, SimulatedNode]:
     """Nodes with clocks off by up to ±conditions.ppm, timers started anywhere, at origin_ns."""
+    db = Database(checked=False)  # the nodes clip their values into the signals' ranges
     return {i: SimulatedNode(i, NodeOscillator(rng.uniform(-conditions.ppm, conditions.ppm), rng.uniform(0, WRAP_US),
-                                               conditions.walk_ppm_per_sqrt_s, rng, origin_ns), rate_hz)
+                                               conditions.walk_ppm_per_sqrt_s, rng, origin_ns), rate_hz, db)
             for i in ids}
 
 
 class SimulatedBus:
     """Runs a hub and simulated nodes from `start_s` to `end_s`; `silent` (node id -> [(from s,
-    to s)]) unplugs a node for those spans. Frames are handed to the hub in arrival order."""
+    to s)]) unplugs a node for those spans. Frames are handed to the hub in arrival order, and
+    a batch taken when a round is complete or a batch period ends (mocap_edge.hub.service)."""
 
     def __init__(self, hub: Hub, nodes: dict[int, SimulatedNode], conditions: BusConditions = BusConditions(),
                  motion: Motion = still, seed: int = 0):
@@ -54,8 +57,11 @@ class SimulatedBus:
         self.batches: list = []
         self._sync_seq = 0
 
-    def run(self, start_s: float, end_s: float, batch_ms: float = 10.0) -> None:
-        events = self._syncs(start_s, end_s) + self._samples(start_s, end_s) + self._heartbeats(start_s, end_s)
+    def run(self, start_s: float, end_s: float, batch_ms: float = 10.0, sample_times_ns=None) -> None:
+        """sample_times_ns: when the nodes sample (ns on the bus's clock), instead of every
+        1 / rate from start_s."""
+        events = self._syncs(start_s, end_s) + self._samples(start_s, end_s, sample_times_ns) + \
+            self._heartbeats(start_s, end_s)
         events.sort(key=lambda e: e[0])
         next_batch = int(start_s * 1e9) + int(batch_ms * 1e6)
         for arrival, frame_id, data in events:
@@ -68,6 +74,8 @@ class SimulatedBus:
                 self.hub.sync_sent(data, arrival)
             else:
                 self.hub.on_frame(arrival, frame_id, data)
+                if self.hub.round_complete(arrival):  # as the hub's service does
+                    self.batches.append(self.hub.take_batch(arrival))
 
     def _quiet(self, node: int, t: float) -> bool:
         return any(a <= t < b for a, b in self.silent.get(node, []))
@@ -83,20 +91,25 @@ class SimulatedBus:
             # The hub's transmit stamp and the node's receive stamp both mark the frame's end:
             # only the queuing before it left differs.
             on_bus = tx + int(self.rng.uniform(0, self.c.sync_delay_us) * 1e3)
+            sync = self.hub.db.sync(seq)
             for k, node in enumerate(self.nodes.values()):
                 if self._quiet(node.id, t):
                     continue
-                for frame_id, data in node.on_frame(*self.hub.db.sync(seq), on_bus):
+                for frame_id, data in node.on_frame(*sync, on_bus):
                     out.append((on_bus + (k + 1) * FRAME_NS, frame_id, data))
         return out
 
-    def _samples(self, start_s: float, end_s: float) -> list:
+    def _samples(self, start_s: float, end_s: float, sample_times_ns=None) -> list:
         out = []
         for node in self.nodes.values():
-            for t in np.arange(start_s, end_s, 1 / node.rate_hz):
+            if sample_times_ns is None:
+                times = [int(t * 1e9) for t in np.arange(start_s, end_s, 1 / node.rate_hz)]
+            else:
+                times = [int(t) for t in sample_times_ns if start_s * 1e9 <= t < end_s * 1e9]
+            for true_ns in times:
                 if not node.running:
                     continue
-                true_ns = int(t * 1e9)
+                t = true_ns * 1e-9
                 q, a = self.motion(node.id, t)
                 frames = node.sample(true_ns, q, a)  # an unplugged node samples on, unheard
                 if self._quiet(node.id, t):
