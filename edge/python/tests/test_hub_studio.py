@@ -66,7 +66,7 @@ def check_against_stream(streams: Streams, start_ns: int, samples: list, time_to
 def test_the_studio_batches_are_the_stream_through_the_hubs_own_decoding_and_clock_fit():
     streams, start = make_streams(), 1_790_000_000_000_000_000
     batches = studio_batches(streams, start)
-    check_against_stream(streams, start, [s for b in batches for s in b.samples], time_tolerance_ns=20_000)
+    check_against_stream(streams, start, [s for b in batches for s in b.samples], time_tolerance_ns=60_000)
     assert [b.sequence for b in batches] == list(range(len(batches)))
     for b in batches:  # each sample leaves in the batch after it reached the hub, within two periods
         assert all(0 < b.send_time_ns - s.sample_time_ns < 25_000_000 for s in b.samples)

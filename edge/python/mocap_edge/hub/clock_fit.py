@@ -53,24 +53,32 @@ def upper_envelope_line(x: np.ndarray, y: np.ndarray, slope: float | None = None
     That line minimises f(b) = max_i (y_i - b·(x_i - m)), whose terms rise with b for the
     points left of m (L) and fall for those right of it (R): f is lowest where the two maxima
     cross, at b = min over i in L of max over j in R of the slope from i to j — one array
-    operation over L × R instead of a hull walked in Python. When pruning left no point right
-    of m, R is the rightmost point: the hull's last edge.
+    operation over L × R instead of a hull walked in Python.
 
-    With a `slope` known to within margin / (the span of x) — the previous fit's — points more
-    than `margin` below the highest line of that slope cannot touch the answer and are left out
-    (the mean stays that of all points): the same line, from fewer points."""
+    With the previous fit's `slope`, points more than `margin` below the highest line of that
+    slope are left out first (the mean stays that of all points). The line from the rest is the
+    answer when every point lies on or below it (then no left-out point could have lowered f);
+    else — the previous slope was further off than margin / span allows, as early fits from a
+    few pairs can be — the line is fitted to all of them."""
+    if np.ptp(x) == 0:
+        raise ValueError("the points have one x: no line")
     mean = float(x.mean())
     if slope is not None and np.isfinite(margin):
         r = y - slope * x
         keep = r >= r.max() - margin
-        if np.ptp(x[keep]) > 0:  # else the pruned points have one x: the line needs them all
-            x, y = x[keep], y[keep]
-    if np.ptp(x) == 0:
-        raise ValueError("the points have one x: no line")
+        line = _min_max_line(x[keep], y[keep], mean)
+        if line is not None and (y - line[1] * x).max() <= line[0] + 1e-9 * float(np.abs(y).max()) + 1e-3:
+            return line
+    line = _min_max_line(x, y, mean)
+    assert line is not None  # two distinct x: some on each side of their mean
+    return line
+
+
+def _min_max_line(x: np.ndarray, y: np.ndarray, mean: float) -> tuple[float, float] | None:
     right = x > mean
-    if not right.any():  # pruning left only points at or before the mean: the hull's last edge
-        right = x == x.max()
     left = ~right
+    if not right.any() or not left.any():
+        return None
     slopes = (y[right][None, :] - y[left][:, None]) / (x[right][None, :] - x[left][:, None])
     b = float(slopes.max(axis=1).min())
     return float((y - b * x).max()), b

@@ -21,13 +21,18 @@ from mocap_edge.hub.sim.bus import BusConditions, SimulatedBus, make_nodes
 from mocap_edge.streams import Streams
 
 HEARTBEAT_NS = 1_000_000_000
+LEAD_NS = 10_000_000_000  # the offline hub's Syncs before the take: its clock fits settled (p99 ~25 µs)
 FrameOut = tuple[int, bytes]  # (frame id, data) a node sends
 
 
 def studio_config(streams: Streams, hub_id: str = "hub0") -> HubConfig:
-    """hub.toml for the simulated studio: node k + 1 is the stream file's sensor k, at its rate."""
+    """hub.toml for the simulated studio: node k + 1 is the stream file's sensor k, at its rate;
+    25 Syncs a second (sample times within 0.13 ms p99 from the third second, 0.03 ms after
+    ten, `make bench`: ample at video rate), not the default 100 — on the studio's two shared
+    cores every CAN frame costs the simulated nodes and the hub, and 100 Syncs/s from 13 nodes
+    are a third of the frames."""
     return HubConfig({k + 1: name for k, name in enumerate(streams.imu_ids)}, hub_id=hub_id,
-                     rate_hz=stream_rate_hz(streams))
+                     rate_hz=stream_rate_hz(streams), sync_hz=25.0)
 
 
 def stream_rate_hz(streams: Streams) -> int:
@@ -112,15 +117,15 @@ class StudioNodes:
 def studio_batches(streams: Streams, start_ns: int, config: HubConfig | None = None,
                    seed: int = 0) -> list[wire.ImuBatch]:
     """The ImuBatch messages the hub publishes for the stream file played from start_ns, made at
-    once: the nodes (running from the start, their clocks fitted from Syncs that began a second
-    before the take) and the hub's decode, clock fit and batching on a simulated bus (sim.bus:
+    once: the nodes (running from the start, their clocks fitted from Syncs that began LEAD_NS
+    before the take, as a hub runs before a take starts) and the hub's decode, clock fit and batching on a simulated bus (sim.bus:
     queuing, lost Syncs). Each batch's send_time_ns is the end of its batch period."""
     config = config or studio_config(streams)
     if config.rate_hz != stream_rate_hz(streams):
         raise EdgeError(f"rate_hz {config.rate_hz} is not the stream file's IMU rate {stream_rate_hz(streams)} Hz")
     sensor = _sensor_indices(streams, config)
     hub = Hub(config)
-    nodes = make_nodes(sorted(sensor), np.random.default_rng(seed), config.rate_hz, origin_ns=-2_000_000_000)
+    nodes = make_nodes(sorted(sensor), np.random.default_rng(seed), config.rate_hz, origin_ns=-LEAD_NS - 1_000_000_000)
     times, period_ns = streams.imu_times_ns, 1e9 / config.rate_hz
 
     def motion(node: int, t_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -130,7 +135,7 @@ def studio_batches(streams: Streams, start_ns: int, config: HubConfig | None = N
     bus = SimulatedBus(hub, nodes, BusConditions(sync_hz=config.sync_hz), motion, seed)
     # The bus runs on the take's clock (0: its start), shifted onto the shared timebase after.
     end_s = (int(times[-1]) + 2 * int(config.batch_ms * 1e6)) * 1e-9
-    bus.run(-1.0, end_s, config.batch_ms, sample_times_ns=times)
+    bus.run(-LEAD_NS * 1e-9, end_s, config.batch_ms, sample_times_ns=times)
     for batch in bus.batches:
         batch.send_time_ns += start_ns
         for s in batch.samples:
