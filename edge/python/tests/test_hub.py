@@ -371,3 +371,12 @@ def test_the_hub_command_publishes_its_own_i2c_imus(tmp_path):
     missing = subprocess.run([sys.executable, "-m", "mocap_edge", "imu-hub", "--config", str(tmp_path / "hub.toml"),
                               "--bind", endpoint], capture_output=True, text=True)
     assert missing.returncode == 1 and "--i2c" in missing.stderr
+
+
+def test_the_hub_benchmark_runs():
+    """`make bench`'s hub line, shortened: its figures come from the hub's own code."""
+    from mocap_edge.hub import bench
+
+    rate, frames = bench.decode_rate(seconds=1.0)
+    assert rate > 0 and frames > 17 * 120 * 2
+    assert 0 < bench.batch_latency_ms(seconds=1.0) < 10.0  # a round leaves when its last node's sample is in
