@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import signal
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -149,11 +150,15 @@ def test_the_hub_process_reads_simulated_nodes_served_over_socketcand(tmp_path):
 
 
 def test_garbage_from_a_client_is_counted_and_the_server_goes_on():
+    """Bad messages are counted; a client that resets before the greeting does not stop the server."""
     streams = make_streams(1.0)
     nodes = StudioNodes(streams, studio_config(streams), time.time_ns(), time.time_ns())
     with socketcand.listen(0) as listener:
         server = socketcand.Server(nodes, listener)
-        with socket.create_connection(listener.getsockname()) as client:
+        gone = socket.create_connection(listener.getsockname())  # a client that resets at once (a port probe)
+        gone.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        gone.close()
+        with socket.create_connection(listener.getsockname(), timeout=5.0) as client:
             done: list[bool] = []
             thread = threading.Thread(target=server.run, args=(lambda: bool(done),))
             thread.start()
@@ -179,3 +184,41 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def test_the_hub_opens_its_link_again_when_the_server_goes_away():
+    """A socketcand server that stops (its box rebooted, the cable pulled) closes the hub's TCP
+    link; python-can's client then reads nothing forever without an error. The hub counts the
+    link lost, tries to open it again once a second, and picks the nodes up again."""
+    from mocap_edge.hub.can_bus import open_bus
+    from mocap_edge.hub.hub import Hub
+    from mocap_edge.hub.service import HubService
+
+    streams = make_streams(6.0)
+    config = studio_config(streams)
+    nodes = StudioNodes(streams, config, time.time_ns() + 500_000_000, time.time_ns())
+    with socketcand.listen(0) as listener:
+        uri = f"socketcand:127.0.0.1:{listener.getsockname()[1]}:can0"
+        stopped: list[bool] = []
+        first = threading.Thread(target=socketcand.Server(nodes, listener).run, args=(lambda: bool(stopped),))
+        first.start()
+        published: list = []
+        service = HubService(open_bus(uri), Hub(config), published.append, reopen=lambda: open_bus(uri))
+        hub = threading.Thread(target=service.run, args=(lambda: False, 4.5))
+        hub.start()
+        time.sleep(1.5)
+        stopped.append(True)  # the server goes away, its client's socket closed
+        first.join(timeout=5)
+        time.sleep(1.0)
+        again: list[bool] = []
+        second = threading.Thread(target=socketcand.Server(nodes, listener).run, args=(lambda: bool(again),))
+        second.start()  # back, on the same port
+        hub.join(timeout=20)
+        again.append(True)
+        second.join(timeout=5)
+    assert service.bus_errors.counts["link_lost"] >= 1 and service.port is not None
+    times = np.array([s.sample_time_ns for m in published if isinstance(m, wire.ImuBatch) for s in m.samples
+                      if s.sensor_id == "pelvis"])
+    gaps = np.diff(times) * 1e-9
+    assert gaps.max() > 0.8 and (times > times[0] + 3.0e9).any()  # a hole while it was away, samples after
+    service.port.bus.shutdown()

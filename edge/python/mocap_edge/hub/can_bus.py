@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import socket
 
 import can
 
@@ -57,4 +58,8 @@ def _socketcand_options(uri: str, address: str) -> dict:
     port, _, channel = rest.partition(":")
     if not (host and port.isdigit() and channel):
         raise EdgeError(f"--can {uri!r}: socketcand:HOST:PORT:CHANNEL, e.g. socketcand:10.0.0.5:29536:can0")
+    try:  # python-can retries a refused connection for 10 s in a busy loop: look first
+        socket.create_connection((host, int(port)), timeout=1.0).close()
+    except OSError as e:
+        raise EdgeError(f"--can {uri}: {e}") from None
     return {"host": host, "port": int(port), "channel": channel, "tcp_tune": True}

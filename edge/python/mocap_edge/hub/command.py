@@ -43,13 +43,14 @@ def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, d
     port = open_bus(can_uri) if can_uri else None
     publish, socket = publisher(bind)
     stop = _stop_on_signals()
+    service = HubService(port, Hub(config), publish, local=local,
+                         reopen=(lambda: open_bus(can_uri)) if can_uri else None)
     try:
-        service = HubService(port, Hub(config), publish, local=local)
         n = service.run(stop, duration_s)
     finally:
         with contextlib.suppress(can.CanError):  # an adapter already gone cannot be closed cleanly
-            if port is not None:
-                port.bus.shutdown()
+            if service.port is not None:
+                service.port.bus.shutdown()
         socket.close()
     i2c = {imu.name: dataclasses.asdict(imu.counts) for imu in local}
     print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "

@@ -9,12 +9,14 @@ the kernel (SocketCAN's restart-ms) or the adapter recovers the bus.
 
 from __future__ import annotations
 
+import contextlib
 import time
 
 import can
 import zmq
 from mocap.net import transport, wire
 
+from mocap_edge.errors import EdgeError
 from mocap_edge.hub.bus_errors import BusErrors
 from mocap_edge.hub.can_bus import CanPort
 from mocap_edge.hub.hub import Hub
@@ -22,15 +24,22 @@ from mocap_edge.hub.hub import Hub
 SYNC_ID = 0x080
 DRAIN = 64  # frames fed before the timers are looked at again
 RETRY_S = 0.1  # after the adapter failed
+REOPEN_NS = 1_000_000_000  # between attempts to open a link that went away
+EMPTY_READS = 50  # reads in a row that return at once with nothing: the peer is gone (a closed socket
+# spins through thousands a second; a read that ends inside a message returns nothing once)
 HEALTH_NS = 1_000_000_000  # a Health report every second
 
 
 class HubService:
-    def __init__(self, port: CanPort | None, hub: Hub, publish, clock_ns=time.time_ns, local: list | None = None):
+    def __init__(self, port: CanPort | None, hub: Hub, publish, clock_ns=time.time_ns, local: list | None = None,
+                 reopen=None):
         """publish(message) sends an ImuBatch or the hub's Health; clock_ns is the hub's clock
         (the shared timebase). port None: no CAN bus; local: the IMUs on the hub's own I2C bus
-        (mocap_edge.hub.i2c.I2cImu, timed on clock_ns), polled every batch period."""
+        (mocap_edge.hub.i2c.I2cImu, timed on clock_ns), polled every batch period. reopen():
+        a new CanPort (EdgeError when it cannot be opened yet), for a link that went away (a
+        socketcand server or an SLCAN adapter's TCP port closed): tried once a second."""
         self.port, self.hub, self.publish, self.clock_ns = port, hub, publish, clock_ns
+        self.reopen, self._reopen_at, self._empty_reads = reopen, 0, 0
         self.local = local or []
         self._local_reported: dict[str, tuple[int, int | None]] = {}
         self.bus_errors = BusErrors()
@@ -46,6 +55,8 @@ class HubService:
         start = now = self.clock_ns()
         next_sync, next_batch, next_health, published = now, now + batch_ns, now + HEALTH_NS, 0
         while not stop() and not (duration_s > 0 and now - start >= duration_s * 1e9):
+            if self.port is None and self.reopen is not None and now >= self._reopen_at:
+                self._try_reopen(now)
             if now >= next_sync and self.port is not None:
                 self._send_sync()
                 next_sync = _after(next_sync, sync_ns, now)
@@ -93,7 +104,14 @@ class HubService:
         An adapter that fails (unplugged, its socket closed) is counted, and tried again after
         a pause: the hub keeps running."""
         try:
+            asked = time.monotonic()
             message = self.port.bus.recv(timeout=timeout_s)
+            if message is None and timeout_s >= 0.005 and time.monotonic() - asked < timeout_s / 10:
+                self._empty_reads += 1  # python-can's socketcand reads a closed socket as "nothing yet"
+                if self._empty_reads >= EMPTY_READS:
+                    self._lose_link()
+                return
+            self._empty_reads = 0
             for _ in range(DRAIN):
                 if message is None:
                     return
@@ -110,9 +128,25 @@ class HubService:
             self.port.bus.send(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False), timeout=0.01)
         except (can.CanOperationError, OSError) as e:  # socketcand's socket raises OSError
             self.bus_errors.send_refused(e)
+            if isinstance(e, ConnectionError):  # the link's peer is gone (a TCP link)
+                self._lose_link()
             return False
         self.bus_errors.send_succeeded()
         return True
+
+    def _lose_link(self) -> None:
+        """The adapter's link is gone: closed, counted, and opened again later (reopen)."""
+        self.bus_errors.counts["link_lost"] += 1
+        with contextlib.suppress(Exception):  # already broken: closing it may fail too
+            self.port.bus.shutdown()
+        self.port, self._empty_reads = None, 0
+        self._reopen_at = self.clock_ns() + REOPEN_NS
+
+    def _try_reopen(self, now_ns: int) -> None:
+        try:
+            self.port = self.reopen()
+        except EdgeError:
+            self._reopen_at = now_ns + REOPEN_NS
 
     def _send_sync(self) -> None:
         seq = self._sync_seq

@@ -18,6 +18,7 @@ heartbeats and Sync answers, as nodes left powered on) until stop().
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import select
 import socket
@@ -69,7 +70,7 @@ class Server:
             client = self._accept(stop)
             if client is None:
                 break
-            with client:
+            with client, contextlib.suppress(OSError):  # a client gone mid-handshake: the next one
                 self._serve(client, stop)
         return self.counts
 
