@@ -167,7 +167,9 @@ def test_an_unplugged_box_closes_its_socket_for_the_span_and_binds_again(tmp_pat
     t = np.array([(m.capture_time_ns - start) * 1e-9 for m in got])
     assert (t < 0.3).sum() == (seconds < 0.3).sum() and not ((t >= 0.3) & (t < 0.6)).any()
     assert (t >= 0.6).any()  # the subscriber found the box again
-    disconnected = [s for e, s in events if e == zmq.EVENT_DISCONNECTED]
+    # disconnections once frames flowed (a handshake dropped while the box was starting, seen
+    # once on CI at -1.5 s, is not the unplug)
+    disconnected = [s for e, s in events if e == zmq.EVENT_DISCONNECTED and s > t.min()]
     reconnected = [s for e, s in events if e == zmq.EVENT_CONNECTED and disconnected and s > disconnected[0]]
     assert seconds[seconds < 0.3].max() < disconnected[0] < 0.6 and reconnected and reconnected[0] >= 0.6, events
 
