@@ -124,6 +124,8 @@ class HubService:
             time.sleep(RETRY_S)
 
     def _send(self, frame_id: int, data: bytes) -> bool:
+        if self.port is None:  # no bus, or its link went away (a send before may have found that)
+            return False
         try:
             self.port.bus.send(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False), timeout=0.01)
         except (can.CanOperationError, OSError) as e:  # socketcand's socket raises OSError
