@@ -15,7 +15,6 @@ import collections
 import numpy as np
 
 from mocap.net import wire
-
 from mocap_edge.hub.bus_errors import BusErrors
 from mocap_edge.hub.can_db import CanFrameError, Database
 from mocap_edge.hub.config import HubConfig

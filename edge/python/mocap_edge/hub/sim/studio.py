@@ -48,7 +48,11 @@ def stream_rate_hz(streams: Streams) -> int:
 
 
 def _sensor_indices(streams: Streams, config: HubConfig) -> dict[int, int]:
-    """node id -> the stream's sensor index; EdgeError when hub.toml names a sensor the stream lacks."""
+    """node id -> the stream's sensor index; EdgeError when hub.toml names a sensor the stream
+    lacks or its rate is not the stream's."""
+    if config.rate_hz != stream_rate_hz(streams):
+        raise EdgeError(f"hub.toml's rate_hz {config.rate_hz} is not the stream file's IMU rate "
+                        f"{stream_rate_hz(streams)} Hz")
     missing = sorted(set(config.names.values()) - set(streams.imu_ids))
     if missing:
         raise EdgeError(f"hub.toml names sensors the stream file does not have: {', '.join(missing)}")
@@ -62,9 +66,6 @@ class StudioNodes:
 
     def __init__(self, streams: Streams, config: HubConfig, start_ns: int, now_ns: int, seed: int = 0,
                  unplugged: tuple[str, float, float] | None = None):
-        if config.rate_hz != stream_rate_hz(streams):
-            raise EdgeError(f"hub.toml's rate_hz {config.rate_hz} is not the stream file's IMU rate "
-                            f"{stream_rate_hz(streams)} Hz")
         self.streams, self.start_ns, self.unplugged = streams, start_ns, unplugged
         self.sensor = _sensor_indices(streams, config)
         self.nodes = make_nodes(sorted(self.sensor), np.random.default_rng(seed), config.rate_hz,
@@ -121,8 +122,6 @@ def studio_batches(streams: Streams, start_ns: int, config: HubConfig | None = N
     before the take, as a hub runs before a take starts) and the hub's decode, clock fit and batching on a simulated bus (sim.bus:
     queuing, lost Syncs). Each batch's send_time_ns is the end of its batch period."""
     config = config or studio_config(streams)
-    if config.rate_hz != stream_rate_hz(streams):
-        raise EdgeError(f"rate_hz {config.rate_hz} is not the stream file's IMU rate {stream_rate_hz(streams)} Hz")
     sensor = _sensor_indices(streams, config)
     hub = Hub(config)
     nodes = make_nodes(sorted(sensor), np.random.default_rng(seed), config.rate_hz, origin_ns=-LEAD_NS - 1_000_000_000)
