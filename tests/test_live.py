@@ -7,6 +7,7 @@ span, bound again after) and an IMU that goes silent degrade the solve, which re
 they return; garbage on the wire is counted and dropped while the host keeps solving."""
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -101,6 +102,25 @@ def test_garbage_on_the_wire_is_counted_and_dropped(studio):
     assert summary["dropped"] == {"not_finite": 1, "wrong_version": 1, "undecodable": 2, "oversized": 1}, summary
     assert summary["frames"] >= 25  # the good frames that followed were solved
     assert "dropped (1 not_finite)" in err
+
+
+def test_mocapd_solves_under_real_time_scheduling_when_the_system_allows_it(studio):
+    allowed = subprocess.run(["chrt", "-f", "10", "true"], capture_output=True).returncode == 0
+    host = subprocess.Popen([str(play.MOCAPD), str(studio.session), "--duration", "1.5", "--quiet", "--realtime", "10"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(0.5)
+        policy = os.sched_getscheduler(host.pid)
+        out, err = host.communicate(timeout=20)
+    finally:
+        if host.poll() is None:
+            host.kill()
+    assert host.returncode == 0, err
+    assert json.loads(out.strip().splitlines()[-1])["realtime"] is allowed
+    assert (policy == os.SCHED_FIFO) is allowed
+    assert ("SCHED_FIFO refused" in err) is not allowed, err
+    bad = subprocess.run([str(play.MOCAPD), str(studio.session), "--realtime", "0"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--realtime 0: a priority from 1 to 99" in bad.stderr
 
 
 def test_edge_command_line_explains_itself():

@@ -1,5 +1,7 @@
-// mocapd: the live host. Usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet]
-// Prints one JSON line on exit: frames, latency percentiles, drops by reason.
+// mocapd: the live host. Usage:
+//   mocapd SESSION.json [--duration S] [--health-period S] [--quiet] [--realtime PRIORITY]
+// Prints one JSON line on exit: frames, latency percentiles, drops by reason, whether it ran
+// under real-time scheduling.
 #include <algorithm>
 #include <csignal>
 #include <cstring>
@@ -7,6 +9,7 @@
 #include <string>
 
 #include "daemon.h"
+#include "realtime.h"
 
 namespace {
 
@@ -24,10 +27,13 @@ double Percentile(std::vector<double> v, double p) {
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
-    std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet]\n";
+    std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] [--realtime PRIORITY]\n"
+                 "  --realtime PRIORITY  solve under SCHED_FIFO at PRIORITY (1-99); without the\n"
+                 "                       permission, a warning and normal scheduling\n";
     return argc < 2 ? 2 : 0;
   }
   mocap::DaemonOptions options;
+  int realtime_priority = 0;  // 0: normal scheduling
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--duration" && i + 1 < argc)
@@ -36,6 +42,11 @@ int main(int argc, char** argv) {
       options.health_period_s = std::atof(argv[++i]);
     else if (a == "--quiet")
       options.log_health = false;
+    else if (a == "--realtime" && i + 1 < argc) {
+      realtime_priority = std::atoi(argv[++i]);
+      if (realtime_priority < mocap::kMinRealtimePriority || realtime_priority > mocap::kMaxRealtimePriority)
+        return std::cerr << "mocapd: --realtime " << argv[i] << ": a priority from 1 to 99\n", 2;
+    }
     else
       return std::cerr << "mocapd: unknown argument " << a << "\n", 2;
   }
@@ -45,6 +56,9 @@ int main(int argc, char** argv) {
     return std::cerr << "mocapd: " << error << "\n", 1;
   auto pipeline = mocap::HostPipeline::Create(std::move(session), &error);
   if (!pipeline) return std::cerr << "mocapd: " << error << "\n", 1;
+  bool realtime = false;
+  if (realtime_priority > 0 && !(realtime = mocap::EnterRealtime(realtime_priority, &error)))
+    std::cerr << "mocapd: warning: " << error << "; solving at normal priority\n";
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, "
@@ -64,6 +78,6 @@ int main(int argc, char** argv) {
     std::cout << (first ? "" : ", ") << "\"" << reason << "\": " << n;
     first = false;
   }
-  std::cout << "}}" << std::endl;
+  std::cout << "}, \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
   return 0;
 }

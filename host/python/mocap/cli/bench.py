@@ -19,6 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
     b.add_argument("--only", nargs="+", default=KINDS, choices=KINDS, help="benchmarks to run (default all)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
+    b.add_argument("--live-normal-priority", action="store_true",
+                   help="run the live benchmark's mocapd without --realtime (to see what real-time scheduling buys)")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
@@ -29,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
-        print(json.dumps(live.bench(seconds=args.live_seconds)), flush=True)
+        print(json.dumps(live.bench(seconds=args.live_seconds, realtime=not args.live_normal_priority)), flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)

@@ -23,6 +23,9 @@ from mocap.net import transport, wire
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
 LEAD_S = 4.0  # between launching the processes and the take's first frame
+# mocapd solves under SCHED_FIFO at this priority (README, "Pointing it at real edge boxes"): here
+# a dozen edge processes share its cores; without the permission it warns and goes on.
+REALTIME_PRIORITY = 10
 
 
 def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple | None = None) -> list[str]:
@@ -114,17 +117,19 @@ def _collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
 
 
 def play(studio: Studio, progress: Callable | None = None, faults: dict | None = None, on_pose: Callable | None = None,
-         record: Path | None = None) -> Run:
+         record: Path | None = None, realtime: bool = True) -> Run:
     """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
     loopback, until the take ends. progress(health) is called once a second; on_pose(pose)
-    for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}."""
+    for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}.
+    realtime: mocapd asks for SCHED_FIFO at REALTIME_PRIORITY."""
     if not MOCAPD.exists():
         raise InputError(f"{MOCAPD} is missing: run `make build`")
     faults = faults or {}
     duration = float(studio.frame_times[-1])
     start_ns = time.time_ns() + int(LEAD_S * 1e9)
+    priority = ["--realtime", str(REALTIME_PRIORITY)] if realtime else []
     host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
-                             "--quiet"], stdout=subprocess.PIPE, text=True)
+                             "--quiet", *priority], stdout=subprocess.PIPE, text=True)
     commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
     if studio.calibrator:
         commands.append(_calibrator_command(studio, duration))

@@ -65,15 +65,17 @@ def _accuracy(studio: Studio, run: Run, matched: list[int], poses: list) -> dict
     return out
 
 
-def bench(seconds: float = 60.0) -> dict:
+def bench(seconds: float = 60.0, realtime: bool = True) -> dict:
     """The live benchmark: 8 cameras x 60 fps + 13 IMUs x 100 Hz over loopback for
-    `seconds`; host latency and frames that never came back."""
+    `seconds`; host latency and frames that never came back. realtime: mocapd asks for
+    real-time scheduling (play.REALTIME_PRIORITY)."""
     with tempfile.TemporaryDirectory() as folder:
         studio = prepare(Path(folder), seconds)
-        result = score(studio, play(studio))
+        run = play(studio, realtime=realtime)
+        result = score(studio, run)
     return {"bench": "live", "seconds": seconds, "cameras": len(studio.camera_ids), "imus": 13,
             "imu_rate_hz": IMU_RATE, "latency_p50_ms": result["latency_p50_ms"],
             "latency_p99_ms": result["latency_p99_ms"], "latency_max_ms": result["latency_max_ms"],
             "frames": result["frames"], "dropped": result["dropped"], "calibration": studio.calibration,
             "joint_centres_pos_cm": result.get("joint_centres_pos_cm"), "pos_error_cm": result.get("pos_error_cm"),
-            "host_dropped_inputs": result["host_dropped"]}
+            "host_dropped_inputs": result["host_dropped"], "host_realtime": run.host_summary.get("realtime")}
