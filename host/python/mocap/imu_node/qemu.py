@@ -268,20 +268,29 @@ def slcan_bus(port: int, timeout_s: float = 5.0, process: subprocess.Popen | Non
 
 def start_slcan_node(image: Path, log_path: Path, args: tuple[str, ...] | list[str] = (),
                      setup=None, attempts: int = 3):
-    """The QEMU node (lm3s6965evb): UART0 served on a free TCP port and opened as an SLCAN
-    bus, UART1 (the firmware's log) written to `log_path`. `setup(qmp)` runs while the
-    machine is still paused (set sensor models). Returns (Qemu, can.BusABC); close both.
-    A port taken between its choice and QEMU's bind makes QEMU exit: retried."""
+    """The QEMU node (lm3s6965evb) of start_slcan_qemu, its UART0 opened as an SLCAN bus
+    here. Returns (Qemu, can.BusABC); close both."""
+    qemu, port = start_slcan_qemu(image, log_path, args, setup, attempts)
+    return qemu, slcan_bus(port, process=qemu.process)
+
+
+def start_slcan_qemu(image: Path, log_path: Path, args: tuple[str, ...] | list[str] = (),
+                     setup=None, attempts: int = 3) -> tuple[Qemu, int]:
+    """The QEMU node (lm3s6965evb) running: UART0 served on a free TCP port (for an SLCAN
+    client: `slcan:socket://127.0.0.1:PORT`), UART1 (the firmware's log) written to
+    `log_path`. `setup(qmp)` runs while the machine is still paused (set sensor models).
+    Returns (Qemu, port); close the Qemu. A port taken between its choice and QEMU's bind
+    makes QEMU exit: retried."""
     for attempt in range(attempts):
         port = free_tcp_port()
         serial = ["-serial", f"tcp:127.0.0.1:{port},server=on,wait=off", "-serial", f"file:{log_path}"]
         qemu = Qemu("lm3s6965evb", image, [*serial, *args], qmp=True)
         try:
-            qmp = qemu.qmp()
+            qmp = qemu.qmp()  # QMP answers once the serial ports listen
             if setup is not None:
                 setup(qmp)
             qmp.command("cont")
-            return qemu, slcan_bus(port, process=qemu.process)
+            return qemu, port
         except Exception as error:
             failed_early = qemu.process.poll() is not None
             stderr = qemu.stderr_text()
