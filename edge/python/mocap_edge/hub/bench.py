@@ -92,8 +92,8 @@ class _ArrivalHub(Hub):
         self.arrivals = {}
 
     def on_frame(self, arrival_ns, frame_id, data, extended=False, remote=False):
-        before = len(self._pending)
+        before = len(self.pending)
         ok = super().on_frame(arrival_ns, frame_id, data, extended, remote)
-        for s in self._pending[before:]:
+        for s in self.pending[before:]:
             self.arrivals[(s.sensor_id, s.sample_time_ns)] = arrival_ns
         return ok

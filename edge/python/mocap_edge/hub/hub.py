@@ -32,7 +32,6 @@ class Hub:
         self._syncs: dict[int, int] = {}  # sync_seq -> the hub's transmit time
         self._pending: list[wire.ImuSample] = []
         self._waiting: set[int] = set()  # nodes with a sample in _pending
-        self._last_sample_ns: dict[int, int] = {}  # node id -> arrival of its latest sample
         self._delays: dict[int, list[int]] = {}  # node id -> arrival - sample time since the last Health
         self._sequence = 0
         self.frames = 0  # frames received
@@ -64,11 +63,16 @@ class Hub:
         than at the end of the batch period."""
         if not self._waiting:
             return False
-        for node_id, arrived in self._last_sample_ns.items():
-            node = self.nodes[node_id]
-            if node_id not in self._waiting and node.rate_hz > 0 and now_ns - arrived < 3e9 / node.rate_hz:
+        for node in self.nodes.values():
+            if (node.name and node.last_sample_ns is not None and node.id not in self._waiting and node.rate_hz > 0
+                    and now_ns - node.last_sample_ns < 3e9 / node.rate_hz):
                 return False
         return True
+
+    @property
+    def pending(self) -> tuple[wire.ImuSample, ...]:
+        """The samples waiting for the next batch, oldest first."""
+        return tuple(self._pending)
 
     def add_samples(self, samples: list[wire.ImuSample]) -> None:
         """Samples timed elsewhere (the hub's I2C IMUs), for the next batch."""
@@ -146,7 +150,6 @@ class Hub:
         self._delays.setdefault(node.id, []).append(delay)
         node.counts.late += delay > self.config.late_ms * 1e6
         self._waiting.add(node.id)
-        self._last_sample_ns[node.id] = arrival_ns
         return True
 
     def _on_CommandReply(self, node: Node, signals: dict, arrival_ns: int) -> bool:

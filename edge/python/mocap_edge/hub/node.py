@@ -54,6 +54,7 @@ class Node:
         self.heartbeat: dict | None = None  # the latest heartbeat's signals
         self.reply: dict | None = None  # the latest CommandReply's signals
         self.last_heard_ns: int | None = None
+        self.last_sample_ns: int | None = None  # arrival of the frame that completed its latest sample
         self._quat: tuple[int, dict] | None = None  # (seq, signals) waiting for its ImuAccel
         self._counter: int | None = None  # the last sample's counter, unwrapped
         self._last_time_ns: int | None = None
@@ -101,6 +102,7 @@ class Node:
         low = int(signals["sample_time_us"])
         node_us = np.floor(now_us) - ((int(np.floor(now_us)) - low) % LOW_BITS)
         time_ns = self.clock.map_sample(node_us)
+        self.last_sample_ns = arrival_ns
         return self._sample(quat, signals, time_ns)
 
     def _sample(self, quat: tuple[int, dict], accel: dict, time_ns: int) -> Sample:

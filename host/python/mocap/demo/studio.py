@@ -22,6 +22,7 @@ from mocap.calibration import from_messages, window
 from mocap.errors import InputError
 from mocap.io.session import Session, SyncSettings
 from mocap.model.solver import imu_set_json
+from mocap.net import wire
 from mocap.sim import demo_motion
 from mocap.sim import take as sim_take
 from mocap_edge import offline
@@ -65,8 +66,7 @@ def calibrate(session: Path, streams: Path, detect_every: tuple[int, int]) -> _c
     """Calibrates `session` (in its own folder) from the first seconds with motion of the
     messages the edge boxes send for the stream file (mocap_edge.offline), as `mocap calibrate
     --recording` calibrates a studio's session: nothing of the truth. The estimated skeleton."""
-    messages = [(t, m.DESCRIPTOR.full_name, m.SerializeToString())
-                for t, m in offline.studio_messages(streams, 0, detect_every)]
+    messages = [wire.arrived(t, m) for t, m in offline.studio_messages(streams, 0, detect_every)]
     estimated = from_messages.estimate(messages, session, window.SECONDS, "the simulated studio")
     from_messages.write_session(session.parent, session, estimated, estimated.report)
     return _core.Skeleton.from_json(estimated.skeleton_json)

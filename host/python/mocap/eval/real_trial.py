@@ -25,6 +25,7 @@ from mocap.io.demo_data import TRIAL
 from mocap.io.trc import Trc, read_trc
 from mocap.model import frames, studio
 from mocap.model.solver import Solver
+from mocap.net import wire
 from mocap.sim import demo_motion
 
 RATE = 60.0
@@ -98,7 +99,7 @@ def host_frames(rig: _core.Rig, layout: _core.KeypointLayout, keypoints: np.ndar
         for c, cam in enumerate(rig.cameras):
             persons = [keypoints[c, f]] if (keypoints[c, f, :, 2] > 0).any() else []
             msg = frames.camera_frame(cam, f, time_ns, layout.name, persons)
-            messages.append((time_ns, msg.DESCRIPTOR.full_name, msg.SerializeToString()))
+            messages.append(wire.arrived(time_ns, msg))
     times = [int(round(f * 1e9 / RATE)) for f in range(keypoints.shape[1])]
     return frames.synchronise_all(_core.InputPath(rig, [], layout), messages, times)
 

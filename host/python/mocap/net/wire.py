@@ -37,6 +37,11 @@ def encode(message) -> list[bytes]:
     return [message.DESCRIPTOR.full_name.encode(), message.SerializeToString()]
 
 
+def arrived(arrival_ns: int, message) -> tuple[int, str, bytes]:
+    """A message as the host's input path is fed it: (arrival ns, type name, payload)."""
+    return arrival_ns, message.DESCRIPTOR.full_name, message.SerializeToString()
+
+
 def decode(frames: list[bytes]):
     """The message of a two-frame ZeroMQ message, checked (see the module docstring)."""
     if len(frames) != 2:

@@ -36,7 +36,7 @@ def messages(t: Take) -> list[tuple[int, str, bytes]]:
             out.append((time_ns, host_frames.camera_frame(cam, f, time_ns, t.layout.name, persons)))
         if t.imus:
             out.append((time_ns, _batch(t, f, time_ns)))
-    return [(arrival, m.DESCRIPTOR.full_name, m.SerializeToString()) for arrival, m in out]
+    return [wire.arrived(arrival, m) for arrival, m in out]
 
 
 def frame_times_ns(t: Take) -> list[int]:

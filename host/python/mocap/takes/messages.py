@@ -47,7 +47,7 @@ def messages(take: TakeFolder) -> list[tuple[int, str, bytes]]:
     out = [(arrival, 0, m) for arrival, m in _camera_frames(take)]
     out += [(arrival, 1, m) for arrival, m in _imu_batches(take)]
     out.sort(key=lambda m: (m[0], m[1]))
-    return [(arrival, m.DESCRIPTOR.full_name, m.SerializeToString()) for arrival, _, m in out]
+    return [wire.arrived(arrival, m) for arrival, _, m in out]
 
 
 def _camera_frames(take: TakeFolder):
