@@ -109,9 +109,12 @@ def test_mocapd_solves_under_real_time_scheduling_when_the_system_allows_it(stud
     host = subprocess.Popen([str(play.MOCAPD), str(studio.session), "--duration", "1.5", "--quiet", "--realtime", "10"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        time.sleep(0.5)
+        started = [host.stderr.readline()]  # a refusal's warning, then "mocapd: N cameras, ...": past the switch
+        while "cameras" not in started[-1] and started[-1]:
+            started.append(host.stderr.readline())
         policy = os.sched_getscheduler(host.pid)
         out, err = host.communicate(timeout=20)
+        err = "".join(started) + err
     finally:
         if host.poll() is None:
             host.kill()
