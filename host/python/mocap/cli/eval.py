@@ -10,7 +10,7 @@ from pathlib import Path
 from mocap import paths
 from mocap.errors import InputError
 from mocap.eval import simulated, tables, tables_heading
-from mocap.sim import detector, take
+from mocap.sim import detector, extremes, take
 
 PRESETS = ["hq13", "hs13", "hq6", "hs6"]
 
@@ -36,6 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--site-std", type=float, default=None, metavar="MM",
                    help="estimated calibration: keep the keypoint sites' change along directions known within "
                         "this many mm (default 2; 0: keep the layout's sites)")
+    e.add_argument("--bend", action="append", default=[], metavar="BONE[,BONE]:AXIS:DEG",
+                   help="bend bones beyond the clip from 1 s on (their own axis x|y|z), e.g. foot_l,foot_r:x:90")
+    e.add_argument("--slip", action="append", default=[], metavar="SENSOR:AT_S:AXIS:DEG",
+                   help="a sensor slips on its segment at AT_S (its own axis), e.g. forearm_l:4:z:60")
     e.add_argument("--json", help="JSON file to write the results to")
     e.add_argument("--table", choices=["paper", "heading"],
                    help="paper: regenerate the paper's tables and plots on the test clips; heading: print the "
@@ -57,8 +61,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--motion and --json are needed unless --table is given")
     motion = Path(args.motion)
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
+    bends, slips = tuple(map(extremes.Bend.parse, args.bend)), tuple(map(extremes.Slip.parse, args.slip))
     config = take.Config(preset=args.preset, cameras=args.cameras,
-                         detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
+                         detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"),
+                         bends=bends, slips=slips)
     cal_options = {} if args.site_std is None else {"site_std": args.site_std / 1000.0}
     results = [simulated.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline, args.calibration,
                                   cal_options)
@@ -66,4 +72,7 @@ def run(args: argparse.Namespace) -> int:
     summary = simulated.summarise(results)
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
+    for r in results:
+        if "extremes" in r:
+            print(json.dumps({"clip": r["clip"], "extremes": r["extremes"]}), flush=True)
     return 0

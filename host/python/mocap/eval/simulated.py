@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mocap import _core
+from mocap import _core, rotations
 from mocap.calibration import informative, window
 from mocap.calibration.calibration_input import CalibrationInput
 from mocap.eval import baselines
@@ -87,10 +87,31 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
                    "site_offsets": config.detector.site_offsets,
                    "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
                    "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
+    if config.bends or config.slips:
+        result["extremes"] = extreme_errors(t, solved, estimated.skeleton if estimated else t.skeleton, config)
     if estimated:
         result["calibration_report"] = estimated.report
         result["calibration_errors"] = calibration_errors(t, estimated)
     return result
+
+
+def extreme_errors(t: sim_take.Take, solved: np.ndarray, solved_skeleton: _core.Skeleton,
+                   config: sim_take.Config) -> dict:
+    """Orientation errors (deg, mean and max) of each bent bone once fully bent, and of each
+    slipped sensor's bone from 1 s after the slip (time to notice it) to the end."""
+    names = t.skeleton.bone_names
+    truth = np.array([t.skeleton.forward_kinematics(th)[0] for th in t.thetas])
+    ours = np.array([solved_skeleton.forward_kinematics(th)[0] for th in solved])
+    times = t.times - t.times[0]
+    spans = [(f"bent {n}", names.index(n), b.from_s + b.ramp_s) for b in config.bends for n in b.bones]
+    bones = {s.name: s.bone for s in t.imus}
+    spans += [(f"slipped {s.sensor} ({names[bones[s.sensor]]})", bones[s.sensor], s.at_s + 1.0) for s in config.slips]
+    out = {}
+    for label, j, from_s in spans:
+        after = times >= from_s
+        e = np.degrees(rotations.angle_between(ours[after, j], truth[after, j])) if after.any() else np.array([np.nan])
+        out[label] = {"mean_deg": float(e.mean()), "max_deg": float(e.max())}
+    return out
 
 
 def summarise(results: list[dict]) -> dict:

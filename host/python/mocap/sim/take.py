@@ -20,7 +20,7 @@ import numpy as np
 from mocap import _core, paths, rotations
 from mocap.io import retarget
 from mocap.model import studio
-from mocap.sim import detector, imu, occlusion
+from mocap.sim import detector, extremes, imu, occlusion
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +48,8 @@ class Config:
     camera_shift_m: float = 0.005
     time_jitter_s: float = 0.001
     mount_max_deg: float = 20.0
+    bends: tuple[extremes.Bend, ...] = ()  # joints bent beyond the clip (the truth includes them)
+    slips: tuple[extremes.Slip, ...] = ()  # sensors that slip on their segment mid-take
 
 
 @dataclasses.dataclass
@@ -95,7 +97,10 @@ def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
 
 def simulate_motion(skeleton: _core.Skeleton, thetas: np.ndarray, dt: float, config: Config,
                     rng: np.random.Generator) -> Take:
-    """A take of a motion in memory: (F, 66) poses of `skeleton`, dt apart (config.rate unused)."""
+    """A take of a motion in memory: (F, 66) poses of `skeleton`, dt apart (config.rate unused),
+    with config's bends and slips."""
+    for b in config.bends:
+        thetas = extremes.bend(thetas, skeleton.bone_names, b, dt)
     preset = PRESETS[config.preset]
     if config.detect_every:
         preset = dataclasses.replace(preset, period=config.detect_every[0], burst=config.detect_every[1])
@@ -115,6 +120,8 @@ def simulate_motion(skeleton: _core.Skeleton, thetas: np.ndarray, dt: float, con
     times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing
     keypoints = _detections(skeleton, layout, sites, true_rig, thetas, preset, config, rng)
     quats, accs = imu_readings(skeleton, imus, thetas, true_times, config, rng)
+    for slip in config.slips:
+        quats, accs = extremes.slip(quats, accs, [s.name for s in imus], true_times, slip)
     return Take(skeleton, layout, imus, told_rig, true_rig, thetas, times, keypoints, quats, accs, sites)
 
 
