@@ -27,7 +27,8 @@ double Percentile(std::vector<double> v, double p) {
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
-    std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] [--realtime PRIORITY]\n"
+    std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] "
+                 "[--realtime PRIORITY]\n"
                  "  --realtime PRIORITY  solve under SCHED_FIFO at PRIORITY (1-99); without the\n"
                  "                       permission, a warning and normal scheduling\n";
     return argc < 2 ? 2 : 0;
@@ -44,10 +45,10 @@ int main(int argc, char** argv) {
       options.log_health = false;
     else if (a == "--realtime" && i + 1 < argc) {
       realtime_priority = std::atoi(argv[++i]);
-      if (realtime_priority < mocap::kMinRealtimePriority || realtime_priority > mocap::kMaxRealtimePriority)
+      if (realtime_priority < mocap::kMinRealtimePriority ||
+          realtime_priority > mocap::kMaxRealtimePriority)
         return std::cerr << "mocapd: --realtime " << argv[i] << ": a priority from 1 to 99\n", 2;
-    }
-    else
+    } else
       return std::cerr << "mocapd: unknown argument " << a << "\n", 2;
   }
   std::string error;

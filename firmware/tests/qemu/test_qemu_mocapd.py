@@ -41,37 +41,8 @@ MAX_GAP_NS = 100_000_000
 def test_mocapd_turns_the_pelvis_as_the_firmware_turned(qemu_arm, tmp_path):
     if not MOCAPD.exists():
         pytest.skip(f"{MOCAPD} is not built (make build)")
-    image = qemu_arm.board_image("lm3s6965evb", "lm3s6965evb_node")
     log = tmp_path / "node_log.txt"
-    hub_ep, camera_ep, host_ep = (f"tcp://127.0.0.1:{qemu_arm.free_tcp_port()}" for _ in range(3))
-    session = _session(tmp_path, [camera_ep, hub_ep], host_ep)
-    (tmp_path / "hub.toml").write_text(HubConfig({NODE_ID: SENSOR}, rate_hz=50, sync_hz=20).to_toml())
-    streams = _camera_seeing_nobody(tmp_path / "camera.npz")
-    qemu, port = qemu_arm.start_slcan_qemu(image, log)
-    start_ns = time.time_ns() + 1_000_000_000
-    processes = []
-    context = zmq.Context.instance()
-    poses_sub = transport.subscriber(context, [host_ep])
-    hub_sub = transport.subscriber(context, [hub_ep])
-    try:
-        processes.append(subprocess.Popen([str(MOCAPD), str(session), "--duration", str(TAKE_S + 4.0), "--quiet"],
-                                          stdout=subprocess.PIPE, text=True))
-        processes.append(subprocess.Popen(
-            [sys.executable, "-m", "mocap_edge", "imu-hub", "--can", f"slcan:socket://127.0.0.1:{port}",
-             "--config", str(tmp_path / "hub.toml"), "--bind", hub_ep, "--duration", str(TAKE_S + 3.0)]))
-        processes.append(subprocess.Popen(
-            [sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{streams}", "--camera", "cam0",
-             "--bind", camera_ep, "--start-ns", str(start_ns)]))
-        poses, batches = _collect(processes[0], poses_sub, hub_sub)
-        summary = json.loads(processes[0].stdout.read().strip().splitlines()[-1])
-    finally:
-        for p in processes:
-            if p.poll() is None:
-                p.terminate()
-            p.wait(timeout=10)
-        qemu.close()
-        poses_sub.close()
-        hub_sub.close()
+    poses, batches, summary = _run_take(qemu_arm, tmp_path, log)
 
     samples = [s for b in batches for s in b.samples if s.sensor_id == SENSOR]
     assert len(samples) > 100, f"{len(samples)} samples reached mocapd's hub subscription"
@@ -102,6 +73,41 @@ def test_mocapd_turns_the_pelvis_as_the_firmware_turned(qemu_arm, tmp_path):
     p99 = np.percentile(errors, 99)
     assert p99 < 0.02, f"{checked} frames: pelvis vs the firmware's orientation p99 {p99:.4f}°, max {max(errors):.4f}°"
     assert not summary["dropped"], summary
+
+
+def _run_take(qemu_arm, folder, log) -> tuple[list, list, dict]:
+    """The QEMU node, the hub process on its SLCAN port, a camera box and mocapd for TAKE_S:
+    mocapd's PoseFrames, the hub's ImuBatches (subscribed beside mocapd) and mocapd's exit line."""
+    hub_ep, camera_ep, host_ep = (f"tcp://127.0.0.1:{qemu_arm.free_tcp_port()}" for _ in range(3))
+    session = _session(folder, [camera_ep, hub_ep], host_ep)
+    (folder / "hub.toml").write_text(HubConfig({NODE_ID: SENSOR}, rate_hz=50, sync_hz=20).to_toml())
+    streams = _camera_seeing_nobody(folder / "camera.npz")
+    qemu, port = qemu_arm.start_slcan_qemu(qemu_arm.board_image("lm3s6965evb", "lm3s6965evb_node"), log)
+    start_ns = time.time_ns() + 1_000_000_000
+    processes = []
+    context = zmq.Context.instance()
+    poses_sub = transport.subscriber(context, [host_ep])
+    hub_sub = transport.subscriber(context, [hub_ep])
+    try:
+        processes.append(subprocess.Popen([str(MOCAPD), str(session), "--duration", str(TAKE_S + 4.0), "--quiet"],
+                                          stdout=subprocess.PIPE, text=True))
+        processes.append(subprocess.Popen(
+            [sys.executable, "-m", "mocap_edge", "imu-hub", "--can", f"slcan:socket://127.0.0.1:{port}",
+             "--config", str(folder / "hub.toml"), "--bind", hub_ep, "--duration", str(TAKE_S + 3.0)]))
+        processes.append(subprocess.Popen(
+            [sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{streams}", "--camera", "cam0",
+             "--bind", camera_ep, "--start-ns", str(start_ns)]))
+        poses, batches = _collect(processes[0], poses_sub, hub_sub)
+        summary = json.loads(processes[0].stdout.read().strip().splitlines()[-1])
+    finally:
+        for p in processes:
+            if p.poll() is None:
+                p.terminate()
+            p.wait(timeout=10)
+        qemu.close()
+        poses_sub.close()
+        hub_sub.close()
+    return poses, batches, summary
 
 
 def _session(folder, inputs: list[str], output: str):
