@@ -15,7 +15,8 @@ from mocap.demo.studio import IMU_RATE, Studio, prepare
 from mocap.eval import metrics
 from mocap.recording import offline
 
-KEYS = ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm", "joint_centres_vel_cms")
+KEYS = ("pos_error_cm", "ori_error_deg", "ori_error_offset_removed_deg", "vel_error_cms", "joint_centres_pos_cm",
+        "joint_centres_vel_cms")
 
 
 def score(studio: Studio, run: Run) -> dict:

@@ -37,16 +37,32 @@ def transform_errors(skeleton: _core.Skeleton, truth: np.ndarray, p_s: np.ndarra
     p_t, r_t = np.array([p for _, p in fk_t]), np.array([r for r, _ in fk_t])
     pos = np.linalg.norm(p_s - p_t, axis=-1)  # (F, J) m
     ori = np.degrees(rotations.angle_between(r_s, r_t))  # (F, J)
+    ori_tracking = offset_removed_errors_deg(r_s, r_t)  # (F, J)
     vel = np.linalg.norm(np.diff(p_s, axis=0) - np.diff(p_t, axis=0), axis=-1) / dt  # (F-1, J) m/s
     names = skeleton.bone_names
     centres = joint_centres.bone_indices(names)
     return {"pos_error_cm": 100 * float(pos.mean()), "ori_error_deg": float(ori.mean()),
+            "ori_error_offset_removed_deg": float(ori_tracking.mean()),
             "vel_error_cms": 100 * float(vel.mean()),
             "joint_centres_pos_cm": 100 * float(pos[:, centres].mean()),
             "joint_centres_vel_cms": 100 * float(vel[:, centres].mean()),
-            "per_joint": {n: {"pos_cm": 100 * float(pos[:, j].mean()), "ori_deg": float(ori[:, j].mean())}
+            "per_joint": {n: {"pos_cm": 100 * float(pos[:, j].mean()), "ori_deg": float(ori[:, j].mean()),
+                              "ori_offset_removed_deg": float(ori_tracking[:, j].mean())}
                           for j, n in enumerate(names)},
             "pos_error_cm_per_frame": (100 * pos.mean(axis=1)).round(3).tolist()}
+
+
+def offset_removed_errors_deg(r_s: np.ndarray, r_t: np.ndarray) -> np.ndarray:
+    """(F, J) degrees between solved and true bone orientations (F, J, 3, 3) once each bone's
+    constant offset over the take is taken out (R_t ~ R_s D_j, D_j the chordal mean of
+    R_s^T R_t): two skeletons that put a bone's frame differently at rest (an estimated
+    calibration's, another tool's) differ by such a constant; what remains is tracking error."""
+    d = np.swapaxes(r_s, -1, -2) @ r_t  # (F, J, 3, 3)
+    u, _, vt = np.linalg.svd(d.sum(axis=0))  # per bone
+    flip = np.ones(u.shape[:-1])
+    flip[:, -1] = np.sign(np.linalg.det(u @ vt))
+    mean = (u * flip[:, None, :]) @ vt  # (J, 3, 3), the nearest rotation to the mean
+    return np.degrees(rotations.angle_between(mean[None], d))
 
 
 def _triangulate(rig: _core.Rig, views: list[tuple[int, np.ndarray]]) -> np.ndarray:

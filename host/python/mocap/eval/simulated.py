@@ -118,8 +118,8 @@ def summarise(results: list[dict]) -> dict:
     """Means over clips (weighted by frames) of the headline metrics, and every clip's result."""
     frames = np.array([r["frames"] for r in results], dtype=float)
     mean = {k: float(np.average([r[k] for r in results], weights=frames))
-            for k in ("pos_error_cm", "ori_error_deg", "vel_error_cms", "joint_centres_pos_cm",
-                      "joint_centres_vel_cms", "floor_cm")}
+            for k in ("pos_error_cm", "ori_error_deg", "ori_error_offset_removed_deg", "vel_error_cms",
+                      "joint_centres_pos_cm", "joint_centres_vel_cms", "floor_cm")}
     first = results[0]
     return {**mean, "frames": int(frames.sum()), "solve_ms_median": float(np.median([r["solve_ms_median"] for r in results])),
             "calibration": first["calibration"], "method": first["method"], "preset": first["preset"],
