@@ -8,10 +8,6 @@
 namespace mocap {
 
 bool EnterRealtime(int priority, std::string* why) {
-  if (priority < kMinRealtimePriority || priority > kMaxRealtimePriority) {
-    *why = "priority " + std::to_string(priority) + " is outside 1-99";
-    return false;
-  }
   sched_param param{};
   param.sched_priority = priority;
   if (sched_setscheduler(0, SCHED_FIFO, &param) != 0) {

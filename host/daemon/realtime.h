@@ -12,7 +12,7 @@ constexpr int kMinRealtimePriority = 1, kMaxRealtimePriority = 99;
 
 // Puts the calling thread (and every thread it starts afterwards: call it before the
 // ZeroMQ context) under SCHED_FIFO at `priority` (1-99). False with *why when the kernel
-// refuses (no CAP_SYS_NICE and no RLIMIT_RTPRIO allowance) or the priority is out of range.
+// refuses: no CAP_SYS_NICE and no RLIMIT_RTPRIO allowance, or a priority outside 1-99.
 bool EnterRealtime(int priority, std::string* why);
 
 }  // namespace mocap

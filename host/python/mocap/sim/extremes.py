@@ -28,13 +28,8 @@ class Bend:
     @staticmethod
     def parse(text: str) -> Bend:
         """BONE[,BONE...]:AXIS:DEGREES, e.g. foot_l,foot_r:x:90."""
-        try:
-            bones, axis, degrees = text.split(":")
-            if axis not in AXES:
-                raise ValueError
-            return Bend(tuple(bones.split(",")), axis, float(degrees))
-        except ValueError:
-            raise InputError(f"--bend {text!r}: BONE[,BONE...]:x|y|z:DEGREES, e.g. foot_l,foot_r:x:90") from None
+        bones, axis, degrees = _fields(text, 3, "--bend", "BONE[,BONE...]:x|y|z:DEGREES, e.g. foot_l,foot_r:x:90")
+        return Bend(tuple(bones.split(",")), axis, float(degrees))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,13 +43,22 @@ class Slip:
     @staticmethod
     def parse(text: str) -> Slip:
         """SENSOR:AT_S:AXIS:DEGREES, e.g. forearm_l:4:z:60."""
-        try:
-            sensor, at_s, axis, degrees = text.split(":")
-            if axis not in AXES:
-                raise ValueError
-            return Slip(sensor, float(at_s), axis, float(degrees))
-        except ValueError:
-            raise InputError(f"--slip {text!r}: SENSOR:AT_S:x|y|z:DEGREES, e.g. forearm_l:4:z:60") from None
+        sensor, at_s, axis, degrees = _fields(text, 4, "--slip", "SENSOR:AT_S:x|y|z:DEGREES, e.g. forearm_l:4:z:60")
+        return Slip(sensor, float(at_s), axis, float(degrees))
+
+
+def _fields(text: str, count: int, flag: str, usage: str) -> list[str]:
+    """The `count` ':'-separated fields of a --bend / --slip value: numbers after the first,
+    the second-to-last an axis; InputError saying how to write it otherwise."""
+    fields = text.split(":")
+    try:
+        if len(fields) != count or fields[-2] not in AXES:
+            raise ValueError
+        for number in fields[1:-2] + fields[-1:]:
+            float(number)
+    except ValueError:
+        raise InputError(f"{flag} {text!r}: {usage}") from None
+    return fields
 
 
 def bend(thetas: np.ndarray, bone_names: list[str], b: Bend, dt: float) -> np.ndarray:
