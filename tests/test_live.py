@@ -311,8 +311,12 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert report["window_motion_score_deg"] >= min(informative.GOOD_SCORE_DEG, 0.9 * report["score_deg"]), report
     assert published[0]["quick"] and abs(published[0]["take_s"] - start) < 0.5, published
     assert all(not c["quick"] for c in published[1:])
-    calibration = [s for s in run.healths[-1].streams if s.stream == "calibration"]
-    assert calibration and calibration[0].received == len(published) and calibration[0].active
+    # every calibration published half a second before mocapd's last Health reached it (under
+    # CI's load the full one was once published after the take's end, as mocapd stopped)
+    last = run.healths[-1]
+    before_last = [c for c in published if c["valid_from_ns"] < last.time_ns - 500_000_000]
+    calibration = [s for s in last.streams if s.stream == "calibration"]
+    assert calibration and len(before_last) <= calibration[0].received <= len(published) and calibration[0].active
     session = Session.load(studio.calibrated / "session.json")
     assert session.imus_calibrated and session.file("layout").is_file()
 
