@@ -79,6 +79,8 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   HealthInputs in;
   in.sync = &input_.sync();
   in.headings = step_.solver().headings();
+  for (size_t i = 0; i < in.headings.size(); ++i)
+    in.distrusted.push_back(step_.solver().distrusted(static_cast<int>(i)));
   in.calibrations = calibrations_.counts();
   in.calibration_active = step_.any_imu_calibrated();
   in.frames_solved = frames_solved_;

@@ -329,7 +329,7 @@ TEST(Pipeline, ACalibrationAppliesFromItsCaptureTime) {
         << k;
     const Eigen::VectorXd theta =
         Eigen::Map<const Eigen::VectorXd>(p.theta().data(), p.theta_size());
-    if (k >= 22) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.002) << k;
+    if (k >= 20) EXPECT_LT(testing::MaxSiteError(studio.scene, theta, studio.poses[k]), 0.002) << k;
   }
   EXPECT_EQ(pipeline->calibrations_applied(), 2u);
   EXPECT_EQ(pipeline->dropped().at("invalid_calibration"), 3u);

@@ -1,5 +1,7 @@
 #include "pose_frame_encoder.h"
 
+#include <algorithm>
+
 #include "mocap/kinematics.h"
 
 namespace mocap {
@@ -59,7 +61,11 @@ v1::PoseFrame EncodePoseFrame(const FrameObservations& frame, const SolveResult&
   p.set_solve_time_ms(r.solve_time_ms);
   p.set_quality_flags(r.flags);
   for (const CameraObservation& c : frame.cameras) p.add_cameras(rig.cameras[c.camera].name);
-  for (const ImuObservation& i : frame.imus) p.add_imus(imus[i.imu].name);
+  for (const ImuObservation& i : frame.imus) {
+    const bool distrusted = std::count(r.imus_distrusted.begin(), r.imus_distrusted.end(), i.imu);
+    if (!distrusted) p.add_imus(imus[i.imu].name);
+  }
+  for (int i : r.imus_distrusted) p.add_imus_distrusted(imus[i].name);
   return p;
 }
 

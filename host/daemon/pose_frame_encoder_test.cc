@@ -19,7 +19,8 @@ TEST(PoseFrameEncoder, APoseFrameCarriesThePoseItsJointsAndWhatItWasSolvedWith) 
   r.iterations = 7, r.solve_time_ms = 2.5, r.flags = kIterationLimit;
   FrameObservations frame;
   frame.cameras.resize(2), frame.cameras[0].camera = 2, frame.cameras[1].camera = 0;
-  frame.imus.resize(1), frame.imus[0].imu = 3;
+  frame.imus.resize(2), frame.imus[0].imu = 3, frame.imus[1].imu = 5;
+  r.imus_distrusted = {5};  // given, but left out of the solve
   const v1::PoseFrame p = EncodePoseFrame(frame, r, 1234, 9, scene.skeleton, scene.rig, scene.imus);
   EXPECT_EQ(p.capture_time_ns(), 1234);
   EXPECT_EQ(p.frame_index(), 9u);
@@ -45,6 +46,8 @@ TEST(PoseFrameEncoder, APoseFrameCarriesThePoseItsJointsAndWhatItWasSolvedWith) 
   EXPECT_EQ(p.cameras(1), scene.rig.cameras[0].name);
   ASSERT_EQ(p.imus_size(), 1);
   EXPECT_EQ(p.imus(0), scene.imus[3].name);
+  ASSERT_EQ(p.imus_distrusted_size(), 1);
+  EXPECT_EQ(p.imus_distrusted(0), scene.imus[5].name);
 }
 
 TEST(PoseFrameEncoder, EveryStatusHasItsOwnValue) {

@@ -52,8 +52,9 @@ v1::Health StreamMonitor::Health(int64_t now_ns, const HealthInputs& in) {
   for (size_t i = 0; i < imus_.size(); ++i) {
     AddStream("imu/" + imu_names_[i], in.sync->ImuActive(i, now_ns), &in.sync->imu_counts(i), true,
               &imus_[i], &h);
-    h.mutable_streams(h.streams_size() - 1)
-        ->set_heading_correction_deg(in.headings[i] * 180 / M_PI);
+    v1::StreamHealth* imu = h.mutable_streams(h.streams_size() - 1);
+    imu->set_heading_correction_deg(in.headings[i] * 180 / M_PI);
+    imu->set_distrusted(i < in.distrusted.size() && in.distrusted[i]);
   }
   for (auto& [hub, stats] : hubs_)
     AddStream("hub/" + hub, stats.received_in_period > 0, nullptr, true, &stats, &h);

@@ -21,6 +21,7 @@ namespace mocap {
 struct HealthInputs {
   const StreamSynchroniser* sync = nullptr;
   std::vector<double> headings;  // rad, per IMU (Solver::headings)
+  std::vector<bool> distrusted;  // per IMU (Solver::distrusted)
   CalibrationCounts calibrations;
   bool calibration_active = false;  // any IMU is solved with
   uint64_t frames_solved = 0;       // since the start

@@ -35,6 +35,7 @@ TEST(StreamMonitor, HealthReportsEachStreamOverThePeriod) {
   HealthInputs in;
   in.sync = &sync;
   in.headings = {M_PI / 180};
+  in.distrusted = {true};
   in.calibrations = {2, 3, 4};
   in.calibration_active = true;
   in.frames_solved = 7;
@@ -55,6 +56,7 @@ TEST(StreamMonitor, HealthReportsEachStreamOverThePeriod) {
   EXPECT_EQ(Stream(h, "camera/cam1").malformed(), 1u);
   EXPECT_EQ(Stream(h, "camera/cam1").dropped(), 1u);
   EXPECT_NEAR(Stream(h, "imu/wrist").heading_correction_deg(), 1.0, 1e-12);
+  EXPECT_TRUE(Stream(h, "imu/wrist").distrusted());
   EXPECT_NEAR(Stream(h, "hub/hub0").latency_p50_ms(), 2.0, 1e-12);
   const v1::StreamHealth& calibration = Stream(h, "calibration");
   EXPECT_EQ(calibration.received(), 2u);

@@ -38,6 +38,7 @@ py::dict Counts(const SolveResult& r) {
                   py::arg("keypoints_behind_camera") = c.keypoints_behind_camera,
                   py::arg("orientations_used") = c.orientations_used,
                   py::arg("orientations_invalid") = c.orientations_invalid,
+                  py::arg("orientations_distrusted") = c.orientations_distrusted,
                   py::arg("accelerations_used") = c.accelerations_used,
                   py::arg("accelerations_invalid") = c.accelerations_invalid,
                   py::arg("unknown_sources") = c.unknown_sources);
@@ -70,6 +71,8 @@ void BindResult(py::module_& m) {
       .def_readonly("iterations", &SolveResult::iterations)
       .def_readonly("solve_time_ms", &SolveResult::solve_time_ms)
       .def_readonly("message", &SolveResult::message)
+      .def_readonly("imus_distrusted", &SolveResult::imus_distrusted,
+                    "IMU sites left out of this solve: the keypoints contradict them")
       .def_property_readonly("timings_ms", &Timings)
       .def_property_readonly("position_unconstrained", flag(kPositionUnconstrained))
       .def_property_readonly("iteration_limit", flag(kIterationLimit))

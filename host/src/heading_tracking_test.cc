@@ -114,8 +114,10 @@ TEST(Solver, TracksHeadingDriftFromABaseline) {
     const std::string& name = told[i].name;
     const bool seen = name.find("arm") != std::string::npos || name == "head" ||
                       name == "lower_back" || name.find("shin") != std::string::npos;
-    // Measured 4.3-5.4 deg for these: the baseline is a mean over the postures it saw.
-    if (seen) EXPECT_NEAR(solver->headings()[i], 5 * kDeg, 1.0 * kDeg) << name;
+    // Measured 2.7-5.1 deg for these: the baseline is a mean over the postures it saw, and
+    // the yaw the solve shows is a small, posture-dependent part of the heading error when
+    // the sensors win over the keypoints (E_R without a robust loss): 4.3-5.4 deg with one.
+    if (seen) EXPECT_NEAR(solver->headings()[i], 5 * kDeg, 2.5 * kDeg) << name;
     EXPECT_GT(solver->headings()[i], 1 * kDeg) << name;  // not the -3 deg of no baseline
   }
 }

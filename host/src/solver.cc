@@ -96,6 +96,7 @@ std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayou
   s->options_ = options;
   s->headings_.assign(s->imus_.size(), 0.0);
   s->heading_baselines_.assign(s->imus_.size(), {});
+  s->slips_ = SlipMonitor(s->skeleton_, s->layout_, s->imus_);
   s->Reset();
   return s;
 }
@@ -160,7 +161,10 @@ bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vecto
   headings_.assign(imus_.size(), 0.0);
   heading_baselines_.assign(imus_.size(), {});
   last_heading_update_.reset();
-  motion_.reset();  // the sites moved: E_A starts again from the next two solves
+  slips_ = SlipMonitor(skeleton_, layout_, imus_);
+  motion_.reset();   // the sites moved: E_A starts again from the next two solves
+  history_.clear();  // poses of the old skeleton: their difference is no motion
+  calibration_changed_ = true;
   return true;
 }
 
@@ -200,6 +204,10 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
   for (size_t i = 0; i < imus_.size(); ++i) {
+    if (slips_.distrusted(static_cast<int>(i))) {
+      result->counts.orientations_distrusted += frame.imu_world[i].has_value();
+      continue;
+    }
     if (frame.imu_world[i] && Active(options_.orientation)) {
       problem.AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
     }
@@ -250,7 +258,10 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
 bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initialising,
                          bool reacquiring, Eigen::VectorXd* x, SolveResult* result,
                          Continuity* continuity) const {
-  const int iterations = initialising ? options_.max_initial_iterations : options_.max_iterations;
+  // A new calibration moves the sensors' terms far from the warm start: the frame is solved
+  // as a first frame is, from the warm start.
+  const bool settling = initialising || calibration_changed_;
+  const int iterations = settling ? options_.max_initial_iterations : options_.max_iterations;
   // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the Cauchy
   // loss would treat their large errors as outliers.
   auto coarse_pass = [&]() {
@@ -259,7 +270,7 @@ bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initial
     if (!ok) result->message = coarse.message;
     return ok;
   };
-  if ((initialising || reacquiring) && !coarse_pass()) {
+  if ((settling || reacquiring) && !coarse_pass()) {
     result->status = SolveStatus::kFailed;
     return false;
   }
@@ -284,6 +295,16 @@ bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initial
     }
   }
   return true;
+}
+
+void Solver::WatchSensors(const CleanFrame& clean, bool tracked, SolveResult* result) {
+  for (int i = 0; i < slips_.size(); ++i) {
+    if (slips_.distrusted(i)) result->imus_distrusted.push_back(i);
+  }
+  if (!tracked || clean.detections.empty()) return;
+  BodyPose pose;
+  ForwardKinematics(skeleton_, theta_.data(), &pose);
+  slips_.Update(clean.timestamp, options_, rig_, layout_, pose, clean.detections, clean.imu_world);
 }
 
 SolveResult Solver::Solve(const FrameObservations& frame) {
@@ -329,6 +350,8 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
     return finish(result.status, result.message);
   theta_ = x;
   initialised_ = true;
+  calibration_changed_ = false;
+  WatchSensors(clean, continuity == Continuity::kContinuous && !initialising, &result);
   Remember(clean, !(result.flags & kPositionUnconstrained), continuity);
   // Only a tracked pose the keypoints hold tells the headings anything.
   if (continuity == Continuity::kContinuous && !initialising &&

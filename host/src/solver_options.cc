@@ -40,6 +40,14 @@ bool SolverOptions::IsValid(std::string* error) const {
                max_heading_step, "in (0, pi] rad");
   check.Expect(heading_baseline_s >= 0.0 && std::isfinite(heading_baseline_s), "heading_baseline_s",
                heading_baseline_s, "finite and >= 0 s");
+  check.Expect(slip_keypoint_cost >= 0.0 && std::isfinite(slip_keypoint_cost), "slip_keypoint_cost",
+               slip_keypoint_cost, "finite and >= 0");
+  check.Expect(slip_window_s > 0.0 && std::isfinite(slip_window_s), "slip_window_s", slip_window_s,
+               "finite and > 0 s");
+  check.Expect(slip_readmit_deg > 0.0 && slip_readmit_deg <= 180.0, "slip_readmit_deg",
+               slip_readmit_deg, "in (0, 180] degrees");
+  check.Expect(slip_readmit_s >= 0.0 && std::isfinite(slip_readmit_s), "slip_readmit_s",
+               slip_readmit_s, "finite and >= 0 s");
   check.Expect(max_iterations >= 1, "max_iterations", max_iterations, ">= 1");
   check.Expect(max_initial_iterations >= 1, "max_initial_iterations", max_initial_iterations,
                ">= 1");

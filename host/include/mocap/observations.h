@@ -67,6 +67,8 @@ struct InputCounts {
   int keypoints_behind_camera = 0;  // site behind the camera at the start of the solve
   int orientations_used = 0;
   int orientations_invalid = 0;  // NaN or not a unit quaternion
+  // From a sensor the keypoints contradict (slip_monitor.h): left out, with its acceleration.
+  int orientations_distrusted = 0;
   int accelerations_used = 0;
   int accelerations_invalid = 0;  // NaN / inf
   int unknown_sources = 0;        // camera or IMU index not in the rig / IMU set, or duplicate
@@ -91,6 +93,8 @@ struct SolveResult {
   double solve_time_ms = 0;  // wall time of Solve()
   SolveTimings timings;      // of the final pass
   std::string message;       // human-readable reason when status is not kOk
+  // The IMU sites left out of this solve as the keypoints contradict them (slip_monitor.h).
+  std::vector<int> imus_distrusted;
 };
 
 }  // namespace mocap

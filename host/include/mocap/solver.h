@@ -18,6 +18,7 @@
 #include "mocap/prior.h"
 #include "mocap/sites.h"
 #include "mocap/skeleton.h"
+#include "mocap/slip_monitor.h"
 #include "mocap/solver_options.h"
 
 namespace mocap {
@@ -58,6 +59,8 @@ class Solver {
   // use is Rz(psi_i) * imus()[i].reference.
   const std::vector<double>& headings() const { return headings_; }
   const SolverOptions& options() const { return options_; }
+  // Whether IMU site i is left out of the solve: the keypoints contradict it (slip_monitor.h).
+  bool distrusted(int i) const { return slips_.distrusted(i); }
   // Replaces the calibration (a skeleton with the same bones, names and parents; a layout
   // with as many keypoints; any IMU sites on its bones) from the next frame on, the pose and
   // its history kept: a calibration refined during capture. The heading corrections start
@@ -116,6 +119,9 @@ class Solver {
   // False, with the status and message in *result, when a pass fails.
   bool SolvePasses(const CleanFrame& frame, double timestamp, bool initialising, bool reacquiring,
                    Eigen::VectorXd* x, SolveResult* result, Continuity* continuity) const;
+  // After a solve (theta_ its solution): the sensors it left out into *result, and, when it
+  // tracked the keypoints, what they say of each sensor (slip_monitor.h).
+  void WatchSensors(const CleanFrame& frame, bool tracked, SolveResult* result);
   // The warm start of a frame at `timestamp`.
   Eigen::VectorXd WarmStart(double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in
@@ -133,6 +139,7 @@ class Solver {
   Eigen::VectorXd theta_;
   bool initialised_ = false;
   bool warm_start_given_ = false;     // SetWarmStart since the last solve: no prediction
+  bool calibration_changed_ = false;  // SetCalibration since the last solve
   std::vector<SolvedFrame> history_;  // up to two previous solved frames, newest last
   std::optional<MotionState> motion_;
   std::optional<double> last_fix_;  // time of the newest solve with keypoints
@@ -142,6 +149,7 @@ class Solver {
   };
   std::vector<HeadingBaseline> heading_baselines_;
   std::optional<double> last_heading_update_;
+  SlipMonitor slips_;
   std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
   double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
 };

@@ -13,7 +13,7 @@ from mocap.calibration import informative, window
 from mocap.calibration.calibration_input import CalibrationInput
 from mocap.eval import baselines
 from mocap.eval.metrics import calibration_errors, errors, floor_cm
-from mocap.model.solver import Solver, solver_options
+from mocap.model.solver import Solver, distrust_spans, solver_options
 from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
@@ -31,14 +31,16 @@ def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOption
 
 
 def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Calibration | None = None,
-          headings: list | None = None) -> tuple[np.ndarray, np.ndarray]:
+          headings: list | None = None, distrusted: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Solved poses (F, 66) and solve times (F,) ms of a take, with the oracle calibration
     (the take's skeleton, nominal layout and true IMU sites) or an estimated one; `headings`,
-    when given, receives each frame's heading corrections (rad, Solver.headings)."""
+    when given, receives each frame's heading corrections (rad, Solver.headings), and
+    `distrusted` each frame's names of the sensors the solve left out (SolveResult.imus_distrusted)."""
     c = calibration
     solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
               else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
-    sensors = list(range(len(t.imus) if c is None else len(c.imus)))  # a calibration may leave them out
+    sites = t.imus if c is None else c.imus  # a calibration may leave some out
+    sensors = list(range(len(sites)))
     thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
     for f in range(len(t.thetas)):
         kp = t.keypoints[f]
@@ -48,6 +50,8 @@ def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Ca
         thetas[f], ms[f] = r.theta, r.solve_time_ms
         if headings is not None:
             headings.append(list(solver.headings))
+        if distrusted is not None:
+            distrusted.append([sites[i].name for i in r.imus_distrusted])
     return thetas, ms
 
 
@@ -79,7 +83,8 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
         options = options_for(omit, settings)
         if estimated and not any(s.startswith("heading_time_constant=") for s in settings):
             options = window.solver_options(options)
-        solved, ms = solve(t, options, estimated)
+        left_out: list[list[str]] = []
+        solved, ms = solve(t, options, estimated, distrusted=left_out)
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate, estimated.skeleton if estimated else None)
     result.update({"clip": str(clip), "method": baseline or "fused", "preset": config.preset,
                    "cameras": len(t.rig.cameras),
@@ -87,6 +92,8 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
                    "site_offsets": config.detector.site_offsets,
                    "seed": seed, "frames": len(t.thetas), "solve_ms_median": float(np.median(ms)),
                    "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
+    if baseline is None:
+        result["distrusted"] = distrust_spans(t.times, left_out)
     if config.bends or config.slips:
         result["extremes"] = extreme_errors(t, solved, estimated.skeleton if estimated else t.skeleton, config)
     if estimated:

@@ -22,6 +22,20 @@ class Solver(_core.Solver):
         super().__init__(skeleton, rig, layout, imus, model, options or _core.SolverOptions())
 
 
+def distrust_spans(times, left_out: list[list[str]]) -> dict:
+    """Of each sensor a solve left out on some frame (left_out: each frame's names, from
+    SolveResult.imus_distrusted or PoseFrame.imus_distrusted at `times`, s): when first (s from
+    the first frame) and for how long in all (s, its frames at the mean frame interval)."""
+    times = np.asarray(times, dtype=float)
+    step = float(np.mean(np.diff(times))) if len(times) > 1 else 0.0
+    out: dict = {}
+    for time, names in zip(times - times[:1].sum(), left_out):
+        for name in names:
+            span = out.setdefault(name, {"first_s": float(time), "seconds": 0.0})
+            span["seconds"] += step
+    return out
+
+
 def imu_set_json(skeleton: _core.Skeleton, imus) -> dict:
     """IMU sites in the solver's IMU set format (mocap.imus/1, sites.h)."""
     return json.loads(_core.imu_sites_to_json(skeleton, list(imus)))

@@ -43,4 +43,10 @@ def markdown(r: dict) -> str:
         lines += [f"IMUs not used: {r['imus_not_used_because']}." if r["imus_not_used_because"]
                   else "No IMUs: a video-only solve.", ""]
     lines += [f"Solve: {r['frames']} frames, {r['imus_used']} IMUs; statuses {r['solve']['statuses']}.", ""]
+    left_out = r["solve"].get("distrusted", {})
+    if left_out:
+        lines += ["Sensors left out of the solve while the keypoints contradicted them (slipped, failed, or "
+                  "mounted other than calibrated):", "",
+                  "| sensor | first (s) | left out (s) |", "|---|---|---|",
+                  *(f"| {name} | {s['first_s']:.2f} | {s['seconds']:.2f} |" for name, s in left_out.items()), ""]
     return "\n".join(lines)

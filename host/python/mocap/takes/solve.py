@@ -29,6 +29,7 @@ from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
 from mocap.io.take_folder import TakeFolder, read_take
 from mocap.model.joint_centres import JOINTS, bone_indices
+from mocap.model.solver import distrust_spans
 from mocap.net import wire
 from mocap.recording import offline
 from mocap.takes import messages as take_messages
@@ -46,7 +47,7 @@ def solve_take(folder: Path, out: Path) -> dict:
     estimated = from_messages.estimate(messages, session, window.SECONDS, str(folder), video_if_still=True)
     from_messages.write_session(out / "session", session, estimated, estimated.report)
     pipeline = offline.pipeline_for(session)
-    thetas, statuses = _per_frame(offline.solve_messages(pipeline, messages), take)
+    thetas, statuses, left_out = _per_frame(offline.solve_messages(pipeline, messages), take)
     skeleton = pipeline.skeleton
     _write_joints(out / "joints.csv", skeleton, thetas, take)
     write_bvh(out / "take.bvh", skeleton, thetas, take.frame_rate)
@@ -57,6 +58,7 @@ def solve_take(folder: Path, out: Path) -> dict:
               "window_motion_score_deg": r["window_motion_score_deg"], "skeleton": r["skeleton"],
               "window": r["window"], "dropped": r["dropped"],
               "solve": {"statuses": {s: statuses.count(s) for s in sorted(set(statuses))},
+                        "distrusted": distrust_spans(np.arange(take.n_frames) / take.frame_rate, left_out),
                         # the heading tracking's correction at the take's end
                         "heading_change_deg": {n: float(np.degrees(h)) for n, h in zip(imus, pipeline.headings)}}}
     (out / "calibration.json").write_text(json.dumps(report, indent=1))
@@ -66,8 +68,8 @@ def solve_take(folder: Path, out: Path) -> dict:
     return report
 
 
-def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str]]:
-    """(F, 66) poses and statuses of the take's video frames, from the solved PoseFrames
+def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str], list[list[str]]]:
+    """(F, 66) poses, statuses and sensors left out of the take's video frames, from the solved PoseFrames
     (matched by capture time); InputError when the host solved a different set of frames."""
     times = take_messages.frame_time_ns(take, np.arange(take.n_frames))
     by_time = {p.capture_time_ns: p for p in poses}
@@ -76,7 +78,8 @@ def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str]]:
         raise InputError(f"the host did not solve {len(missing)} of the take's {take.n_frames} frames "
                          f"(the first: {missing[0]})")
     chosen = [by_time[int(t)] for t in times]
-    return np.array([p.theta for p in chosen]), [STATUS_NAMES[p.status] for p in chosen]
+    return (np.array([p.theta for p in chosen]), [STATUS_NAMES[p.status] for p in chosen],
+            [list(p.imus_distrusted) for p in chosen])
 
 
 def _write_joints(path: Path, skel: _core.Skeleton, thetas: np.ndarray, take: TakeFolder) -> None:
