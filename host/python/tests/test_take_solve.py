@@ -16,6 +16,7 @@ from mocap.eval import balancing_take
 from mocap.io.demo_data import TRIAL_CACHE, TRIAL_DONE
 from mocap.model.joint_centres import JOINTS
 from mocap.sim import take_out
+from mocap.takes import report as take_report
 from mocap.takes import solve as take_solve
 
 
@@ -169,3 +170,11 @@ def test_solve_wants_exactly_one_input(tmp_path):
     out = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", "--take", str(tmp_path / "none"), "--out",
                           str(tmp_path / "o")], capture_output=True, text=True)
     assert out.returncode != 0 and "Traceback" not in out.stderr
+
+
+def test_the_report_names_the_sensors_the_solve_left_out(simulated):
+    report = simulated[2]
+    assert report["solve"]["distrusted"] == {}, "the keypoints contradicted a true sensor"
+    assert "left out of the solve" not in take_report.markdown(report)
+    left_out = {**report, "solve": {**report["solve"], "distrusted": {"shin_r": {"first_s": 4.27, "seconds": 4.02}}}}
+    assert "| shin_r | 4.27 | 4.02 |" in take_report.markdown(left_out)

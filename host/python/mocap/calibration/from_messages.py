@@ -116,7 +116,7 @@ def estimate(messages: Iterable[tuple[int, str, bytes]], session: Path, seconds:
                          f"swing the arms, bend) while the studio calibrates")
     used = data.without_imus() if why_not else data
     cal = window.estimate(synced.rig, used, seconds=seconds, first_frame=first, quick=quick)
-    names = [] if used.readings is None else used.readings.names
+    names = [s.name for s in cal.imus]
     window_frames = int(np.searchsorted(data.times, data.times[first] + seconds) - first)
     return Estimated(cal.skeleton.to_json(), json.dumps(imu_set_json(cal.skeleton, cal.imus), indent=1),
                      json.dumps(layout_json(cal.skeleton, cal.layout), indent=1),

@@ -19,3 +19,9 @@ class ImuReadings:
         """The readings from frame `first` on."""
         return dataclasses.replace(self, quaternions=self.quaternions[first:],
                                    accelerations=None if self.accelerations is None else self.accelerations[first:])
+
+    def only(self, names: list[str]) -> ImuReadings:
+        """The readings of the named sensors, in that order."""
+        columns = [self.names.index(n) for n in names]
+        return ImuReadings(list(names), [self.bones[c] for c in columns], self.quaternions[:, columns],
+                           None if self.accelerations is None else self.accelerations[:, columns])

@@ -42,7 +42,7 @@ import dataclasses
 import numpy as np
 
 from mocap import _core, paths, rotations
-from mocap.calibration import imu_position
+from mocap.calibration import imu_position, plausible
 from mocap.calibration import imus as imu_calibration
 from mocap.calibration import skeleton as skeleton_estimate
 from mocap.calibration.calibration_input import CalibrationInput
@@ -174,7 +174,7 @@ def estimate(rig: _core.Rig, data: CalibrationInput, seconds: float = SECONDS, s
     estimate_sites = site_std > 0 and readings is not None and len(readings.names) > 0 and not quick
     solved = _solve_window(w, start, frames, starts, options, dense, quick, site_std if estimate_sites else 0.0)
     report = _report(w, start, solved, len(frames), quick, estimate_sites, pose_name, len(options.held_poses))
-    imus = list(solved.result.imus)
+    imus = [s for s in solved.result.imus if s.name not in solved.left_out]
     report["imu_positions"] = _place_imus(solved.result.skeleton, rig, solved.layout, imus, w.detections, w.times,
                                           readings, dense)
     return Calibration(solved.result.skeleton, solved.layout, imus, start.estimate, report, np.array(used),
@@ -264,6 +264,8 @@ def _options(skel: _core.Skeleton, held_frames: list[int], pose: np.ndarray | No
 class _Solved:
     result: object  # _core.calibrate_window's, step 4 (with the accelerometer's headings when found)
     accelerometer: dict[str, tuple[float, float]]  # per sensor (yaw rad, sigma rad; infinite: none)
+    rechecked: dict  # per sensor whose mounting was solved again (mocap.calibration.plausible)
+    left_out: dict[str, str]  # sensors left out -> why
     layout: _core.KeypointLayout  # step 4b's sites, or step 4's layout
     thetas: np.ndarray  # the window's poses
     directions: np.ndarray  # (3 x keypoints, kept)
@@ -280,11 +282,14 @@ def _solve_window(w: _Window, start: _Start, frames: list, starts: list, options
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
             options.heading_priors = [np.array(accelerometer[s.name]) for s in start.sites]
             result = _core.calibrate_window(*args, prior.load(), frames, starts, options)
+        result, rechecked, left_out = plausible.recheck(
+            lambda sites: _core.calibrate_window(start.skeleton, w.rig, start.layout, sites, prior.load(), frames,
+                                                 starts, options), result, np.asarray(prior.load().mean))
         layout, thetas, directions = (_estimate_sites(result, w.rig, frames, options, site_std) if site_std > 0
                                       else (result.layout, result.thetas, np.zeros((0, 0))))
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
-    return _Solved(result, accelerometer, layout, thetas, directions)
+    return _Solved(result, accelerometer, rechecked, left_out, layout, thetas, directions)
 
 
 def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool, sites_estimated: bool,
@@ -300,6 +305,7 @@ def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
         "sites_estimated": sites_estimated, "site_directions_kept": int(solved.directions.shape[1]),
         "calibration_pose": pose_name, "calibration_pose_frames": held_frames,
+        "mountings_rechecked": solved.rechecked, "imus_left_out": solved.left_out,
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
                           **_accelerometer_report(*solved.accelerometer[s.name]),
@@ -367,6 +373,7 @@ def _place_imus(skel, rig, layout, imus: list, detections, times, readings: ImuR
     if not imus or readings is None or readings.accelerations is None or not dense:
         why = "no accelerations" if readings is None or readings.accelerations is None else "detections too sparse"
         return {s.name: {"offset_m": np.asarray(s.offset).tolist(), "estimated": False, "why": why} for s in imus}
+    readings = readings.only([s.name for s in imus])  # a sensor left out has no site
     thetas = _window_motion(skel, rig, layout, imus, detections, times, readings)
     out = {}
     for i, s in enumerate(imus):

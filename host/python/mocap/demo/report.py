@@ -32,6 +32,12 @@ def _largest(corrections: dict) -> str:
     return f"{corrections[name]:+.1f} deg ({name})"
 
 
+def _left_out(spans: dict | None) -> str:
+    if spans is None:
+        return "n/a"
+    return ", ".join(f"{name} from {s['first_s']:.1f} s for {s['seconds']:.1f} s" for name, s in spans.items()) or "none"
+
+
 def report(result: dict, seconds: float, studio: Studio) -> str:
     def fmt(v, unit=""):
         return "n/a" if v is None else f"{v:.2f}{unit}"
@@ -58,7 +64,8 @@ def report(result: dict, seconds: float, studio: Studio) -> str:
         f"| host latency p50 / p99 / max | {fmt(result['latency_p50_ms'])} / {fmt(result['latency_p99_ms'])} / "
         f"{fmt(result['latency_max_ms'], ' ms')} |",
         f"| inputs dropped by the host | {dropped} |",
-        f"| heading tracking: largest correction at the end | {_largest(result['heading_corrections_deg'])} |", "",
+        f"| heading tracking: largest correction at the end | {_largest(result['heading_corrections_deg'])} |",
+        f"| sensors left out (the keypoints contradicted them) | {_left_out(result.get('distrusted'))} |", "",
         "Host latency: from the arrival of a frame's last input to the publication of its pose. Orientation "
         "with the offset removed: an estimated skeleton puts a bone's frame at rest differently from the "
         "simulation's (a constant rotation per bone over the take); without that constant, what remains is "

@@ -13,6 +13,7 @@ from mocap import rotations
 from mocap.demo.play import Run, play
 from mocap.demo.studio import IMU_RATE, Studio, prepare
 from mocap.eval import metrics
+from mocap.model.solver import distrust_spans
 from mocap.recording import offline
 
 KEYS = ("pos_error_cm", "ori_error_deg", "ori_error_offset_removed_deg", "vel_error_cms", "joint_centres_pos_cm",
@@ -61,6 +62,7 @@ def _accuracy(studio: Studio, run: Run, matched: list[int], poses: list) -> dict
     if history.is_file():  # the live calibrator's, at take times
         out["calibrations"] = [{**c, "take_s": (c["valid_from_ns"] - run.start_ns) * 1e-9}
                                for c in map(json.loads, history.read_text().splitlines())]
+    out["distrusted"] = distrust_spans(studio.frame_times[matched], [list(p.imus_distrusted) for p in poses])
     with_imus = np.array([len(p.imus) > 0 for p in poses])
     if studio.calibration == "live" and with_imus.any():  # from the first calibration on
         first = int(np.argmax(with_imus))

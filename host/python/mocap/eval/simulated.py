@@ -40,13 +40,15 @@ def solve(t: sim_take.Take, options: _core.SolverOptions, calibration: window.Ca
     solver = (Solver(t.skeleton, t.rig, t.layout, t.imus, options=options) if c is None
               else Solver(c.skeleton, t.rig, c.layout, c.imus, options=options))
     sites = t.imus if c is None else c.imus  # a calibration may leave some out
+    names = [s.name for s in t.imus]
+    columns = [names.index(s.name) for s in sites]  # the take's readings of the solver's sensors
     sensors = list(range(len(sites)))
     thetas, ms = np.zeros_like(t.thetas), np.zeros(len(t.thetas))
     for f in range(len(t.thetas)):
         kp = t.keypoints[f]
         cams = list(range(len(t.rig.cameras))) if kp is not None else []
         kp = kp if kp is not None else np.zeros((0, len(t.layout), 3))
-        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f, sensors], t.accelerations[f, sensors])
+        r = solver.solve(t.times[f], cams, kp, sensors, t.quaternions[f, columns], t.accelerations[f, columns])
         thetas[f], ms[f] = r.theta, r.solve_time_ms
         if headings is not None:
             headings.append(list(solver.headings))

@@ -4,6 +4,26 @@ calibration.json."""
 from __future__ import annotations
 
 
+def _position(w: dict, name: str) -> str:
+    """The offset and position columns of a sensor's row."""
+    if name in w.get("imus_left_out", {}):
+        return "- | left out |"
+    p = w["imu_positions"][name]
+    return f"{', '.join(f'{100 * v:.1f}' for v in p['offset_m'])} | {'estimated' if p['estimated'] else 'usual place'}"
+
+
+def _mountings(w: dict) -> list[str]:
+    """What the window's plausibility check did (mocap.calibration.plausible)."""
+    lines = []
+    for name, c in w.get("mountings_rechecked", {}).items():
+        tries = ", ".join(f"{a}: {t['turn_deg']:.0f} deg" for a, t in c["tries"].items())
+        lines.append(f"- {name}: its bone {c['turn_deg']:.0f} deg from the prior's mean pose; mounting turned half a "
+                     f"turn about each axis ({tries}): {c.get('kept', 'none plausible')}.")
+    for name, why in w.get("imus_left_out", {}).items():
+        lines.append(f"- **{name} left out**: {why}.")
+    return lines + [""] if lines else []
+
+
 def markdown(r: dict) -> str:
     w = r["window"]
     rows = "\n".join(f"| {g} | {s:.3f} | {100 * r['skeleton']['lengths_m'][g]:.1f} cm | {r['skeleton']['frames_per_length'][g]} |"
@@ -14,11 +34,9 @@ def markdown(r: dict) -> str:
     change = r["solve"]["heading_change_deg"]
     accel = lambda i: ("-" if i["heading_accelerometer_deg"] is None  # noqa: E731
                        else f"{i['heading_accelerometer_deg']:.1f} ± {i['heading_accelerometer_sigma_deg']:.1f}")
-    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {accel(i)} | {change[name]:+.1f} | "
-                     f"{i['first_residual_deg']:.1f} | "
-                      f"{i['residual_deg']:.2f} | {', '.join(f'{100 * v:.1f}' for v in w['imu_positions'][name]['offset_m'])} | "
-                      f"{'estimated' if w['imu_positions'][name]['estimated'] else 'usual place'} |"
-                      for name, i in w["imus"].items())
+    imus = "\n".join(f"| {name} | {i['bone']} | {i['heading_deg']:.1f} | {accel(i)} | {change.get(name, 0.0):+.1f} | "
+                     f"{i['first_residual_deg']:.1f} | {i['residual_deg']:.2f} | {_position(w, name)} |"
+                     for name, i in w["imus"].items())
     lines = [
         "# Calibration report", "",
         f"Skeleton, first estimate: {r['skeleton']['from_frames']} frames from {w['window_start_s']:.1f} s "
@@ -38,7 +56,8 @@ def markdown(r: dict) -> str:
         lines += ["Heading: from the window, with the accelerometer's (± its standard deviation) as a prior; change: "
                   "the heading tracking's correction at the take's end.", "",
                   "| sensor | bone | heading (deg) | accelerometer (deg) | change (deg) | start residual (deg) | "
-                  "residual (deg) | offset (cm) | position |", "|---|---|---|---|---|---|---|---|---|", imus, ""]
+                  "residual (deg) | offset (cm) | position |", "|---|---|---|---|---|---|---|---|---|", imus, "",
+                  *_mountings(w)]
     else:
         lines += [f"IMUs not used: {r['imus_not_used_because']}." if r["imus_not_used_because"]
                   else "No IMUs: a video-only solve.", ""]
