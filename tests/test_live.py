@@ -294,12 +294,15 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     result = score.score(studio, run)
     assert result["dropped"] == 0, result
     t = np.array([p.capture_time_ns - run.start_ns for p in run.poses]) * 1e-9
-    with_imus = np.array([len(p.imus) for p in run.poses])
+    # every IMU in the solve, or left out as the keypoints contradict it (the quick
+    # calibration's mountings are rougher: slip_monitor.h)
+    with_imus = np.array([len(p.imus) + len(p.imus_distrusted) for p in run.poses])
     # Measured (this machine, 2 cores shared with 11 processes): the quick calibration from
     # 14 s on, the full one 12-15 s later; joint centres 2.55 cm from the first.
     assert "calibrated_from_s" in result, "no calibration reached mocapd during the take"
     start = result["calibrated_from_s"]
-    assert start < 42.0 and (with_imus[t < start - 0.1] == 0).all() and (with_imus[t > start + 0.1] == 13).all()
+    assert start < 42.0 and (with_imus[t < start - 0.1] == 0).all() and (with_imus[t > start + 0.1] == 13).all(), \
+        result["distrusted"]
     assert result["calibrated"]["joint_centres_pos_cm"] < 3.0, result["calibrated"]
     report = json.loads((studio.calibrated / "calibration.json").read_text())
     published = result["calibrations"]  # quick first, the same seconds in full after it
@@ -326,6 +329,6 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert len(common) >= 0.98 * len(run.poses)
     diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in common]
     assert np.median(diff) < 1e-6, np.percentile(diff, [50, 90, 100])
-    assert sum(len(p.imus) == 13 for p in poses) > 0.9 * (with_imus == 13).sum()
+    assert sum(len(p.imus) + len(p.imus_distrusted) == 13 for p in poses) > 0.9 * (with_imus == 13).sum()
     calibrated = _core.Skeleton.load(str(studio.calibrated / "skeleton.json"))
     assert np.allclose(skeleton.offsets, calibrated.offsets, atol=1e-9)  # the BVH's skeleton: the latest

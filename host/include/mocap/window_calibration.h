@@ -51,8 +51,18 @@ struct HeldPose {
   }
 };
 
+// The window's terms: the solver's, but E_R keeps a robust loss. With the mountings unknown,
+// a frame whose video pose is wrong (a limb's twist, a trunk on sparse detections) would
+// otherwise pull every mounting and heading: on HS takes without it the trunk sensors'
+// headings came out 52-131 degrees off (07_06).
+inline SolverOptions WindowTerms() {
+  SolverOptions o;
+  o.orientation.loss = LossType::kCauchy;
+  return o;
+}
+
 struct CalibrationOptions {
-  SolverOptions terms;           // E_R, E_P, E_PP, E_PD weights and losses; thresholds
+  SolverOptions terms = WindowTerms();  // E_R, E_P, E_PP, E_PD weights and losses; thresholds
   std::vector<int> scale_group;  // per bone: its length group, -1 for none (may be empty)
   std::vector<int> shift_group;  // per bone: its shift group, -1 for none (may be empty)
   double scale_sigma = 0.05;     // prior on each group scale around its start (relative)

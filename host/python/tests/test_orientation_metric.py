@@ -4,7 +4,7 @@ over the take."""
 
 import numpy as np
 
-from mocap import rotations
+from mocap import _core, paths, rotations
 from mocap.eval import metrics
 
 
@@ -35,3 +35,17 @@ def test_an_error_that_grows_over_the_take_is_not_taken_for_an_offset():
     solved = truth @ drift
     removed = metrics.offset_removed_errors_deg(solved, truth)
     assert removed[0, 0] > 25 and removed[-1, 0] > 25  # the ends stay 30 deg from the mean offset
+
+
+def test_a_bone_upside_down_all_take_is_counted_though_its_offset_removed_error_is_nil():
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    truth = np.zeros((30, skeleton.pose_dim))
+    truth[:, 2] = 1.0
+    truth[:, 3 + 3 * skeleton.bone_names.index("shin_l")] = 0.3
+    solved = truth.copy()
+    foot = skeleton.bone_names.index("foot_r")
+    solved[:, 3 + 3 * foot: 6 + 3 * foot] = [np.pi * 0.97, 0, 0]  # rolled about its long axis
+    e = metrics.errors(skeleton, truth, solved, 1 / 60)
+    assert e["per_joint"]["foot_r"]["ori_offset_removed_deg"] < 1e-6
+    assert e["upside_down_frames"]["foot_r"] == 30
+    assert "foot_l" not in e["upside_down_frames"]

@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
     for r in results:
-        told = {k: r[k] for k in ("extremes", "distrusted") if r.get(k)}
+        told = {k: r[k] for k in ("extremes", "distrusted", "upside_down_frames") if r.get(k)}
         if told:
             print(json.dumps({"clip": r["clip"], **told}), flush=True)
     return 0

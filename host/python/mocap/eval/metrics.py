@@ -21,6 +21,9 @@ from mocap.model import joint_centres, studio
 from mocap.sim.take import Take
 
 
+UPSIDE_DOWN_DEG = 90.0
+
+
 def errors(skeleton: _core.Skeleton, truth: np.ndarray, solved: np.ndarray, dt: float,
            solved_skeleton: _core.Skeleton | None = None) -> dict:
     """Errors of solved poses against the truth; solved_skeleton: the skeleton they were solved
@@ -49,6 +52,10 @@ def transform_errors(skeleton: _core.Skeleton, truth: np.ndarray, p_s: np.ndarra
             "per_joint": {n: {"pos_cm": 100 * float(pos[:, j].mean()), "ori_deg": float(ori[:, j].mean()),
                               "ori_offset_removed_deg": float(ori_tracking[:, j].mean())}
                           for j, n in enumerate(names)},
+            # frames on which a bone is more than a quarter turn from the truth, with any
+            # skeleton convention's offset: upside down, reversed (the offset-removed metric
+            # takes a bone upside down all take for a constant offset)
+            "upside_down_frames": {n: int(k) for n, k in zip(names, (ori > UPSIDE_DOWN_DEG).sum(axis=0)) if k},
             "pos_error_cm_per_frame": (100 * pos.mean(axis=1)).round(3).tolist()}
 
 
