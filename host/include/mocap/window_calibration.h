@@ -63,10 +63,10 @@ inline SolverOptions WindowTerms() {
 
 struct CalibrationOptions {
   SolverOptions terms = WindowTerms();  // E_R, E_P, E_PP, E_PD weights and losses; thresholds
-  std::vector<int> scale_group;  // per bone: its length group, -1 for none (may be empty)
-  std::vector<int> shift_group;  // per bone: its shift group, -1 for none (may be empty)
-  double scale_sigma = 0.05;     // prior on each group scale around its start (relative)
-  double shift_sigma = 0.05;     // m, prior on each group shift around zero
+  std::vector<int> scale_group;         // per bone: its length group, -1 for none (may be empty)
+  std::vector<int> shift_group;         // per bone: its shift group, -1 for none (may be empty)
+  double scale_sigma = 0.05;            // prior on each group scale around its start (relative)
+  double shift_sigma = 0.05;            // m, prior on each group shift around zero
   // Per shift group, per axis (of its first bone's parent frame), overriding shift_sigma: a
   // tiny sigma holds an axis that trades with another parameter (a gauge), e.g. the hips'
   // height against the spine's length when no keypoint marks the pelvis origin.
