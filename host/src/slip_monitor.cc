@@ -52,14 +52,6 @@ SlipMonitor::SlipMonitor(const Skeleton& skeleton, const KeypointLayout& layout,
                    [&](int a, int b) { return sensors_[a].bone < sensors_[b].bone; });
 }
 
-void SlipMonitor::Reset() {
-  for (Sensor& s : sensors_) {
-    s.costs.clear();
-    s.distrusted = false;
-    s.agreeing_since.reset();
-  }
-}
-
 std::vector<double> SlipMonitor::OwnCosts(const SolverOptions& options, const Rig& rig,
                                           const KeypointLayout& layout, const BodyPose& pose,
                                           const std::vector<Detection>& detections) const {

@@ -53,8 +53,6 @@ class SlipMonitor {
               const KeypointLayout& layout, const BodyPose& pose,
               const std::vector<Detection>& detections,
               const std::vector<std::optional<Eigen::Matrix3d>>& imu_world);
-  // Forgets the evidence and trusts every sensor again (a new calibration).
-  void Reset();
 
  private:
   struct Sensor {

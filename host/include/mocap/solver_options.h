@@ -37,6 +37,8 @@ struct TermOptions {
 
 struct SolverOptions {
   // Weights: 1 / (typical error)^2 of each measurement, so a typical error costs ~1.
+  // E_R without a robust loss: a sensor wins over the prior on poses the prior never saw; one
+  // the keypoints contradict is left out instead (slip_monitor.h).
   TermOptions orientation{true, 1.0 / (0.035 * 0.035), LossType::kTrivial, 4.0};  // 2 degrees
   TermOptions position{true, 1.0 / 25.0, LossType::kCauchy, 1.0};                 // 5 pixels
   // E_A compares the measured acceleration with the second difference of the solved
