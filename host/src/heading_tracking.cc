@@ -12,15 +12,13 @@
 
 namespace mocap {
 
-void Solver::TrackHeadings(const CleanFrame& frame) {
+void Solver::TrackHeadings(const CleanFrame& frame, const BodyPose& pose) {
   const double dt = last_heading_update_ ? std::min(frame.timestamp - *last_heading_update_,
                                                     options_.max_history_gap)
                                          : 0.0;
   last_heading_update_ = frame.timestamp;
   if (options_.heading_time_constant <= 0.0 || dt <= 0.0) return;
   const double gain = std::min(1.0, dt / options_.heading_time_constant);
-  BodyPose pose;
-  ForwardKinematics(skeleton_, theta_.data(), &pose);
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (!frame.imu_world[i]) continue;
     // The world-frame turn from the measured sensor orientation to the solved one; its

@@ -297,13 +297,12 @@ bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initial
   return true;
 }
 
-void Solver::WatchSensors(const CleanFrame& clean, bool tracked, SolveResult* result) {
+void Solver::WatchSensors(const CleanFrame& clean, const BodyPose& pose, bool tracked,
+                          SolveResult* result) {
   for (int i = 0; i < slips_.size(); ++i) {
     if (slips_.distrusted(i)) result->imus_distrusted.push_back(i);
   }
   if (!tracked || clean.detections.empty()) return;
-  BodyPose pose;
-  ForwardKinematics(skeleton_, theta_.data(), &pose);
   slips_.Update(clean.timestamp, options_, rig_, layout_, pose, clean.detections, clean.imu_world);
 }
 
@@ -351,12 +350,14 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   theta_ = x;
   initialised_ = true;
   calibration_changed_ = false;
-  WatchSensors(clean, continuity == Continuity::kContinuous && !initialising, &result);
-  Remember(clean, !(result.flags & kPositionUnconstrained), continuity);
+  BodyPose pose;
+  ForwardKinematics(skeleton_, theta_.data(), &pose);
+  WatchSensors(clean, pose, continuity == Continuity::kContinuous && !initialising, &result);
+  Remember(clean, pose, !(result.flags & kPositionUnconstrained), continuity);
   // Only a tracked pose the keypoints hold tells the headings anything.
   if (continuity == Continuity::kContinuous && !initialising &&
       !(result.flags & kPositionUnconstrained)) {
-    TrackHeadings(clean);
+    TrackHeadings(clean, pose);
   }
   return finish(initialising ? SolveStatus::kInitialised : SolveStatus::kOk, "");
 }

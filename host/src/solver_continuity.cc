@@ -39,12 +39,11 @@ Eigen::VectorXd Solver::WarmStart(double timestamp) const {
   return x;
 }
 
-void Solver::Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity) {
+void Solver::Remember(const CleanFrame& frame, const BodyPose& pose, bool position_constrained,
+                      Continuity continuity) {
   if (history_.size() == 2) history_.erase(history_.begin());
   history_.push_back({frame.timestamp, theta_, position_constrained});
 
-  BodyPose pose;
-  ForwardKinematics(skeleton_, theta_.data(), &pose);
   MotionState next;
   next.timestamp = frame.timestamp;
   next.accel = frame.accel_world;

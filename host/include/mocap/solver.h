@@ -107,11 +107,13 @@ class Solver {
   // keypoints (the jump is drift), or restarted after the keypoints were lost (the motion
   // state's velocities are forgotten).
   enum class Continuity { kContinuous, kReacquired, kRestarted };
-  void Remember(const CleanFrame& frame, bool position_constrained, Continuity continuity);
+  // pose: the solved theta_'s forward kinematics (as for the next two).
+  void Remember(const CleanFrame& frame, const BodyPose& pose, bool position_constrained,
+                Continuity continuity);
   // (Re)builds the prior terms' constant matrices when their weights changed.
   void UpdatePriorResiduals();
   // Moves the heading corrections towards the solved pose's (heading_time_constant).
-  void TrackHeadings(const CleanFrame& frame);
+  void TrackHeadings(const CleanFrame& frame, const BodyPose& pose);
   // Turns each IMU's world orientation and acceleration by its heading correction.
   void TurnByHeadings(CleanFrame* frame) const;
   // The optimisation of a frame from *x: a coarse pass first when (re)initialising, the fine
@@ -119,9 +121,10 @@ class Solver {
   // False, with the status and message in *result, when a pass fails.
   bool SolvePasses(const CleanFrame& frame, double timestamp, bool initialising, bool reacquiring,
                    Eigen::VectorXd* x, SolveResult* result, Continuity* continuity) const;
-  // After a solve (theta_ its solution): the sensors it left out into *result, and, when it
+  // After a solve (pose its solution): the sensors it left out into *result, and, when it
   // tracked the keypoints, what they say of each sensor (slip_monitor.h).
-  void WatchSensors(const CleanFrame& frame, bool tracked, SolveResult* result);
+  void WatchSensors(const CleanFrame& frame, const BodyPose& pose, bool tracked,
+                    SolveResult* result);
   // The warm start of a frame at `timestamp`.
   Eigen::VectorXd WarmStart(double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in

@@ -274,17 +274,19 @@ class _Solved:
 def _solve_window(w: _Window, start: _Start, frames: list, starts: list, options: _core.CalibrationOptions,
                   dense: bool, quick: bool, site_std: float) -> _Solved:
     """Step 4, its accelerometer headings and step 4 again with them, then 4b (site_std > 0)."""
-    args = (start.skeleton, w.rig, start.layout, start.sites)
+    model = prior.load()
+
+    def solve(sites: list):  # step 4 from these IMU sites
+        return _core.calibrate_window(start.skeleton, w.rig, start.layout, sites, model, frames, starts, options)
+
     try:
-        result = _core.calibrate_window(*args, prior.load(), frames, starts, options)
+        result = solve(start.sites)
         accelerometer = _accelerometer_headings(result, w.rig, w.detections, w.times, None if quick else w.readings,
                                                 dense)
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
             options.heading_priors = [np.array(accelerometer[s.name]) for s in start.sites]
-            result = _core.calibrate_window(*args, prior.load(), frames, starts, options)
-        result, rechecked, left_out = plausible.recheck(
-            lambda sites: _core.calibrate_window(start.skeleton, w.rig, start.layout, sites, prior.load(), frames,
-                                                 starts, options), result, np.asarray(prior.load().mean))
+            result = solve(start.sites)
+        result, rechecked, left_out = plausible.recheck(solve, result, np.asarray(model.mean))
         layout, thetas, directions = (_estimate_sites(result, w.rig, frames, options, site_std) if site_std > 0
                                       else (result.layout, result.thetas, np.zeros((0, 0))))
     except ValueError as e:

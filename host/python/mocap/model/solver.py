@@ -29,7 +29,8 @@ def distrust_spans(times, left_out: list[list[str]]) -> dict:
     times = np.asarray(times, dtype=float)
     step = float(np.mean(np.diff(times))) if len(times) > 1 else 0.0
     out: dict = {}
-    for time, names in zip(times - times[:1].sum(), left_out):
+    start = times[0] if len(times) else 0.0
+    for time, names in zip(times - start, left_out):
         for name in names:
             span = out.setdefault(name, {"first_s": float(time), "seconds": 0.0})
             span["seconds"] += step
