@@ -14,7 +14,8 @@ each IMU's mounting and heading, for the fused solve that follows.
    the window's consecutive frames solved with step 4's calibration), and step 4 again with
    those headings as priors: a segment that barely tilts in the window (the pelvis, the head)
    explains its orientations with any heading, its mounting's yaw taking up the rest, while
-   its accelerations turn with the heading alone.
+   its accelerations turn with the heading alone. A heading still further from its
+   accelerometer's than that allows is held there, or the sensor left out (`headings`).
    4b. With IMUs, the keypoint sites (where the detector's keypoints sit on their bones): a
    second window solve with step 4's skeleton, mountings and headings held and the poses
    free, whose change of the sites is kept only along the directions the window observes
@@ -42,7 +43,7 @@ import dataclasses
 import numpy as np
 
 from mocap import _core, paths, rotations
-from mocap.calibration import imu_position, plausible
+from mocap.calibration import headings, imu_position, plausible
 from mocap.calibration import imus as imu_calibration
 from mocap.calibration import skeleton as skeleton_estimate
 from mocap.calibration.calibration_input import CalibrationInput
@@ -264,6 +265,7 @@ def _options(skel: _core.Skeleton, held_frames: list[int], pose: np.ndarray | No
 class _Solved:
     result: object  # _core.calibrate_window's, step 4 (with the accelerometer's headings when found)
     accelerometer: dict[str, tuple[float, float]]  # per sensor (yaw rad, sigma rad; infinite: none)
+    headings_held: dict  # per sensor whose heading was held at its accelerometer's (mocap.calibration.headings)
     rechecked: dict  # per sensor whose mounting was solved again (mocap.calibration.plausible)
     left_out: dict[str, str]  # sensors left out -> why
     layout: _core.KeypointLayout  # step 4b's sites, or step 4's layout
@@ -276,22 +278,28 @@ def _solve_window(w: _Window, start: _Start, frames: list, starts: list, options
     """Step 4, its accelerometer headings and step 4 again with them, then 4b (site_std > 0)."""
     model = prior.load()
 
-    def solve(sites: list):  # step 4 from these IMU sites
+    def solve(sites: list, heading_priors: list | None = None):  # step 4 from these IMU sites (and priors)
+        if heading_priors is not None:
+            options.heading_priors = heading_priors
         return _core.calibrate_window(start.skeleton, w.rig, start.layout, sites, model, frames, starts, options)
 
     try:
         result = solve(start.sites)
         accelerometer = _accelerometer_headings(result, w.rig, w.detections, w.times, None if quick else w.readings,
                                                 dense)
+        headings_held, held_out = {}, {}
         if any(np.isfinite(sigma) for _, sigma in accelerometer.values()):  # step 4 again, with them
             options.heading_priors = [np.array(accelerometer[s.name]) for s in start.sites]
             result = solve(start.sites)
+            result, headings_held, held_out = headings.recheck(
+                lambda priors: solve(start.sites, priors), result, accelerometer, options.heading_priors)
         result, rechecked, left_out = plausible.recheck(solve, result, np.asarray(model.mean))
+        left_out.update(held_out)
         layout, thetas, directions = (_estimate_sites(result, w.rig, frames, options, site_std) if site_std > 0
                                       else (result.layout, result.thetas, np.zeros((0, 0))))
     except ValueError as e:
         raise InputError(f"calibration: {e}") from None
-    return _Solved(result, accelerometer, rechecked, left_out, layout, thetas, directions)
+    return _Solved(result, accelerometer, headings_held, rechecked, left_out, layout, thetas, directions)
 
 
 def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool, sites_estimated: bool,
@@ -307,7 +315,8 @@ def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool
         "shifts_window_m": {g: np.asarray(d).tolist() for g, d in zip(SHIFT_GROUPS, result.shifts)},
         "sites_estimated": sites_estimated, "site_directions_kept": int(solved.directions.shape[1]),
         "calibration_pose": pose_name, "calibration_pose_frames": held_frames,
-        "mountings_rechecked": solved.rechecked, "imus_left_out": solved.left_out,
+        "headings_held": solved.headings_held, "mountings_rechecked": solved.rechecked,
+        "imus_left_out": solved.left_out,
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
                           **_accelerometer_report(*solved.accelerometer[s.name]),

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mocap import paths
 from mocap.errors import InputError
-from mocap.eval import simulated, tables, tables_heading
+from mocap.eval import simulated, tables, tables_heading, take_truth
 from mocap.sim import detector, extremes, take
 
 PRESETS = ["hq13", "hs13", "hq6", "hs6"]
@@ -18,6 +18,10 @@ PRESETS = ["hq13", "hs13", "hq6", "hs6"]
 def register(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser("eval", help="simulate takes of real motion, solve them and score the solver")
     e.add_argument("--motion", help="BVH file or folder of BVH files (searched recursively)")
+    e.add_argument("--take", metavar="DIR",
+                   help="instead: a take folder of `mocap simulate`, solved as `mocap solve --take` solves it "
+                        "(into --out) and scored against the truth beside it")
+    e.add_argument("--out", metavar="DIR", help="--take: where the solve writes (default: DIR/solved)")
     e.add_argument("--preset", default="hq13", choices=PRESETS,
                    help="HQ: detections every frame, 8 cameras; HS: 2 of every 8 frames, 4 cameras (default hq13)")
     e.add_argument("--cameras", type=int, default=None, help="number of cameras (default: the preset's)")
@@ -57,8 +61,10 @@ def run(args: argparse.Namespace) -> int:
         summary = tables.write(args.seed, Path(args.docs), f"mocap eval --table paper --seed {args.seed}")
         print(json.dumps({p: round(s["pos_error_cm"], 2) for p, s in summary["configurations"].items()}), flush=True)
         return 0
+    if args.take:
+        return _take(args)
     if not args.motion or not args.json:
-        raise InputError("--motion and --json are needed unless --table is given")
+        raise InputError("--motion (or --take) and --json are needed unless --table is given")
     motion = Path(args.motion)
     clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
     bends, slips = tuple(map(extremes.Bend.parse, args.bend)), tuple(map(extremes.Slip.parse, args.slip))
@@ -76,4 +82,13 @@ def run(args: argparse.Namespace) -> int:
         told = {k: r[k] for k in ("extremes", "distrusted", "upside_down_frames") if r.get(k)}
         if told:
             print(json.dumps({"clip": r["clip"], **told}), flush=True)
+    return 0
+
+
+def _take(args: argparse.Namespace) -> int:
+    folder = Path(args.take)
+    result = take_truth.score(folder, Path(args.out) if args.out else folder / "solved")
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps({k: v for k, v in result.items() if k != "per_bone"}), flush=True)
     return 0

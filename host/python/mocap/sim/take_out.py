@@ -1,7 +1,8 @@
 """The simulated studio written as a take folder (`mocap simulate --take-out DIR`), with the
 truth that a take from another tool would not carry, for the calibration's tests.
 
-The demo motion (mocap.sim.demo_motion, 60 Hz) is played through mocap.sim.take: the told
+The demo motion (mocap.sim.demo_motion, 60 Hz), or a BVH clip (retargeted, its first
+`seconds`), is played through mocap.sim.take with the chosen keypoint layout: the told
 (perturbed) rig goes to Calib.toml, each camera's detections to OpenPose JSON (a camera that
 sees no keypoint in a frame, and every frame without detections, writes "people": []), and
 the IMUs are sampled at IMU_RATE on the take's clock (sample k at k / IMU_RATE s, video
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, rotations
+from mocap.io import retarget
 from mocap.io.take_folder import SEGMENT_BONES, ImuRecording, TakeFolder, write_take
 from mocap.io.xsens_csv import TICKS_PER_S
 from mocap.model.poses import calibration_poses
@@ -53,20 +55,31 @@ def _people(keypoints: list, n_cameras: int, n_keypoints: int) -> list:
             for c in range(n_cameras)]
 
 
+def _motion(seconds: float, clip: Path | None) -> tuple[_core.Skeleton, np.ndarray, float]:
+    """(skeleton, poses, dt) at FRAME_RATE: the demo motion, or the clip's first `seconds`."""
+    if clip is None:
+        return demo_motion.load_motion(FRAME_RATE, seconds)
+    mapping, thetas, dt = retarget.load_clip(clip, FRAME_RATE)
+    skeleton = _core.Skeleton.from_bones(retarget.BONES, mapping.parents, mapping.offsets)
+    return skeleton, thetas[: int(round(seconds / dt)) + 1], dt
+
+
 def simulate(seconds: float, preset: str = "hq13", seed: int = 0,
              imu_errors: imu.ImuErrors = imu.ImuErrors(),
-             calibration_pose: str | None = None, still_s: float = 0.0) -> tuple[TakeFolder, Truth]:
+             calibration_pose: str | None = None, still_s: float = 0.0,
+             motion: Path | None = None, layout: str = "blazepose33") -> tuple[TakeFolder, Truth]:
     """The take (IMU quaternions in each sensor's earth frame) and its truth; with a
     calibration pose ("T" or "N", mocap.model.poses), the performer holds it for 1 s
     and blends into the motion over 0.5 s first; with still_s, stands still first for that
-    long (in a pose of the motion, 3 s in) and blends into it over 0.5 s."""
+    long (in a pose of the motion, 3 s in) and blends into it over 0.5 s. motion: a BVH clip
+    instead of the demo motion; layout: the detector's keypoint layout (host/data/layouts)."""
     rng = np.random.default_rng(seed)
-    skeleton, thetas, dt = demo_motion.load_motion(FRAME_RATE, seconds)
+    skeleton, thetas, dt = _motion(seconds, motion)
     if still_s > 0:
         thetas = demo_motion.after_held_pose(thetas, thetas[min(len(thetas) - 1, round(3.0 / dt))], dt, still_s)
     if calibration_pose:
         thetas = demo_motion.after_held_pose(thetas, calibration_poses(skeleton)[calibration_pose], dt)
-    config = sim_take.Config(preset=preset, imu=imu_errors)
+    config = sim_take.Config(preset=preset, imu=imu_errors, layout=layout)
     t = sim_take.simulate_motion(skeleton, thetas, dt, config, rng)
     headings = rng.uniform(-180.0, 180.0, len(t.imus))
     for s, h in zip(t.imus, headings):
@@ -102,9 +115,11 @@ def write_truth(folder: Path, truth: Truth) -> None:
 
 
 def run(folder: Path, seconds: float, preset: str = "hq13", seed: int = 0,
-        calibration_pose: str | None = None, still_s: float = 0.0) -> dict:
+        calibration_pose: str | None = None, still_s: float = 0.0, motion: Path | None = None,
+        layout: str = "blazepose33") -> dict:
     """`mocap simulate --take-out`: simulates, writes the take folder and its truth."""
-    take, truth = simulate(seconds, preset, seed, calibration_pose=calibration_pose, still_s=still_s)
+    take, truth = simulate(seconds, preset, seed, calibration_pose=calibration_pose, still_s=still_s,
+                           motion=motion, layout=layout)
     write_take(folder, take)
     write_truth(Path(folder), truth)
     return {"take": str(folder), "frames": take.n_frames, "cameras": len(take.rig.cameras),

@@ -13,8 +13,12 @@ def _position(w: dict, name: str) -> str:
 
 
 def _mountings(w: dict) -> list[str]:
-    """What the window's plausibility check did (mocap.calibration.plausible)."""
-    lines = []
+    """What the window's checks did: headings held at their accelerometer's
+    (mocap.calibration.headings), mountings solved again (mocap.calibration.plausible)."""
+    lines = [f"- {name}: heading {h['window_deg']:.1f} deg against its accelerometer's {h['accelerometer_deg']:.1f} "
+             f"± {h['sigma_deg']:.1f}: held there ({h['heading_deg']:.1f}), its orientations then fit "
+             f"{h['residual_deg_held']:.2f} deg (before {h['residual_deg_before']:.2f})."
+             for name, h in w.get("headings_held", {}).items()]
     for name, c in w.get("mountings_rechecked", {}).items():
         tries = ", ".join(f"{a}: {t['turn_deg']:.0f} deg" for a, t in c["tries"].items())
         lines.append(f"- {name}: its bone {c['turn_deg']:.0f} deg from the prior's mean pose; mounting turned half a "

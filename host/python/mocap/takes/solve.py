@@ -17,6 +17,7 @@ OUTDIR/session/ (the calibrated session the take was solved with).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -38,7 +39,20 @@ from mocap.takes.report import markdown
 STATUS_NAMES = {v: k.removeprefix("STATUS_").lower() for k, v in wire.PoseFrame.Status.items()}
 
 
+@dataclasses.dataclass
+class SolvedTake:
+    report: dict  # what calibration.json holds
+    skeleton: _core.Skeleton  # the estimated one the take was solved with
+    thetas: np.ndarray  # (F, 66) at the take's video frames
+
+
 def solve_take(folder: Path, out: Path) -> dict:
+    """Solves the take folder into `out`; returns the report (calibration.json)."""
+    return solve(folder, out).report
+
+
+def solve(folder: Path, out: Path) -> SolvedTake:
+    """solve_take, also giving the solved poses and the skeleton they are of."""
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
@@ -65,7 +79,7 @@ def solve_take(folder: Path, out: Path) -> dict:
     for name in ("skeleton.json", "imus.json", "layout.json"):
         shutil.copyfile(out / "session" / name, out / name)
     (out / "calibration.md").write_text(markdown(report))
-    return report
+    return SolvedTake(report, skeleton, thetas)
 
 
 def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str], list[list[str]]]:
