@@ -17,6 +17,7 @@ OUTDIR/session/ (the calibrated session the take was solved with).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -38,7 +39,17 @@ from mocap.takes.report import markdown
 STATUS_NAMES = {v: k.removeprefix("STATUS_").lower() for k, v in wire.PoseFrame.Status.items()}
 
 
-def solve_take(folder: Path, out: Path) -> dict:
+@dataclasses.dataclass
+class Calibrated:
+    """A take as the host solves it: its messages and the session calibrated from them."""
+    take: TakeFolder
+    messages: list[tuple[int, str, bytes]]  # (arrival ns, type name, payload), arrival order
+    session: Path  # the calibrated session file (OUTDIR/session/session.json)
+    estimated: from_messages.Estimated
+
+
+def calibrate(folder: Path, out: Path) -> Calibrated:
+    """The take's messages, and its session calibrated from them into OUTDIR/session/."""
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
@@ -46,7 +57,13 @@ def solve_take(folder: Path, out: Path) -> dict:
     session = take_messages.write_session(take, out / "session")
     estimated = from_messages.estimate(messages, session, window.SECONDS, str(folder), video_if_still=True)
     from_messages.write_session(out / "session", session, estimated, estimated.report)
-    pipeline = offline.pipeline_for(session)
+    return Calibrated(take, messages, session, estimated)
+
+
+def solve_take(folder: Path, out: Path) -> dict:
+    calibrated = calibrate(folder, out)
+    take, messages, estimated = calibrated.take, calibrated.messages, calibrated.estimated
+    pipeline = offline.pipeline_for(calibrated.session)
     thetas, statuses, left_out = _per_frame(offline.solve_messages(pipeline, messages), take)
     skeleton = pipeline.skeleton
     _write_joints(out / "joints.csv", skeleton, thetas, take)
