@@ -139,6 +139,7 @@ class Solved:
     wall_ms: float  # the Solver.solve call, timed from Python
     cpu_ms: float  # this process's CPU time in it (what preemption by other processes does not add)
     solve_time_ms: float  # the solver's own timing (C++)
+    iterations: int
     status: str
     theta: np.ndarray
     keypoints: np.ndarray  # (4, 25, 3) the frame's keypoints per camera of the rig (NaN: no subject)
@@ -170,7 +171,7 @@ def solve_timed(session: Path, messages: list, n_cameras: int, limit: int | None
             wall, cpu = (time.perf_counter_ns() - start) * 1e-6, (time.process_time_ns() - cpu) * 1e-6
             per_camera = np.full((n_cameras, KEYPOINTS, 3), np.nan)
             per_camera[list(f.cameras)] = args[2]
-            out.append(Solved(wall, cpu, r.solve_time_ms, r.status, np.array(r.theta), per_camera))
+            out.append(Solved(wall, cpu, r.solve_time_ms, r.iterations, r.status, np.array(r.theta), per_camera))
 
     for arrival_ns, type_name, payload in messages:
         if type_name in frames.INPUT_TYPES:
@@ -211,6 +212,7 @@ def ours(calibrated: take_solve.Calibrated, repeats: int, limit: int | None = No
     inside, _ = best_of([[s.solve_time_ms for s in run] for run in runs])
     statuses = [s.status for s in runs[0]]
     return ({**figures, "solve_time_ms_median": inside["median_ms"], "solve_time_ms_p90": inside["p90_ms"],
+             "mean_iterations": round(float(np.mean([s.iterations for s in runs[0]])), 2),
              "statuses": {s: statuses.count(s) for s in sorted(set(statuses))}},
             np.array([s.keypoints for s in runs[0]]))
 
