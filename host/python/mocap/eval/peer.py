@@ -68,11 +68,12 @@ class PeerUnavailable(Exception):
 def _tied_to(core: int | None):
     """A subprocess preexec: pinned to `core`, killed when this process dies."""
     parent = os.getpid()
+    prctl = ctypes.CDLL(None, use_errno=True).prctl  # looked up before the fork, not in the child
 
     def setup() -> None:
         if core is not None:
             os.sched_setaffinity(0, {core})
-        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+        prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
         if os.getppid() != parent:  # the parent died before prctl
             os._exit(1)
     return setup
