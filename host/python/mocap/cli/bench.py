@@ -1,4 +1,4 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub)."""
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer)."""
 
 from __future__ import annotations
 
@@ -6,13 +6,13 @@ import argparse
 import json
 
 from mocap.demo import score as live
-from mocap.errors import DataMissingError
-from mocap.eval import bench, edge_detector
+from mocap.errors import DataMissingError, MocapError
+from mocap.eval import bench, edge_detector, peer
 from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "edge", "firmware", "hub"]
+KINDS = ["solver", "live", "edge", "firmware", "hub", "peer"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -48,4 +48,9 @@ def run(args: argparse.Namespace) -> int:
             print(json.dumps(result), flush=True)
         except DataMissingError as e:
             print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
+    if "peer" in args.only:  # ours against Pose2Sim's triangulation, both on this core
+        try:
+            print(json.dumps(peer.bench(repeats=args.repeats)), flush=True)
+        except MocapError as e:  # the trial is missing or cannot be read: the other lines stand
+            print(json.dumps({"bench": "peer", "skipped": str(e)}), flush=True)
     return 0

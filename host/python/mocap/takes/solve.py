@@ -46,13 +46,17 @@ class SolvedTake:
     thetas: np.ndarray  # (F, 66) at the take's video frames
 
 
-def solve_take(folder: Path, out: Path) -> dict:
-    """Solves the take folder into `out`; returns the report (calibration.json)."""
-    return solve(folder, out).report
+@dataclasses.dataclass
+class Calibrated:
+    """A take as the host solves it: its messages and the session calibrated from them."""
+    take: TakeFolder
+    messages: list[tuple[int, str, bytes]]  # (arrival ns, type name, payload), arrival order
+    session: Path  # the calibrated session file (OUTDIR/session/session.json)
+    estimated: from_messages.Estimated
 
 
-def solve(folder: Path, out: Path) -> SolvedTake:
-    """solve_take, also giving the solved poses and the skeleton they are of."""
+def calibrate(folder: Path, out: Path) -> Calibrated:
+    """The take's messages, and its session calibrated from them into OUTDIR/session/."""
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
@@ -60,7 +64,19 @@ def solve(folder: Path, out: Path) -> SolvedTake:
     session = take_messages.write_session(take, out / "session")
     estimated = from_messages.estimate(messages, session, window.SECONDS, str(folder), video_if_still=True)
     from_messages.write_session(out / "session", session, estimated, estimated.report)
-    pipeline = offline.pipeline_for(session)
+    return Calibrated(take, messages, session, estimated)
+
+
+def solve_take(folder: Path, out: Path) -> dict:
+    """Solves the take folder into `out`; returns the report (calibration.json)."""
+    return solve(folder, out).report
+
+
+def solve(folder: Path, out: Path) -> SolvedTake:
+    """solve_take, also giving the solved poses and the skeleton they are of."""
+    calibrated = calibrate(folder, out)
+    take, messages, estimated = calibrated.take, calibrated.messages, calibrated.estimated
+    pipeline = offline.pipeline_for(calibrated.session)
     thetas, statuses, left_out = _per_frame(offline.solve_messages(pipeline, messages), take)
     skeleton = pipeline.skeleton
     _write_joints(out / "joints.csv", skeleton, thetas, take)
