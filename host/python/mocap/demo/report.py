@@ -58,15 +58,15 @@ def report(result: dict, seconds: float, studio: Studio) -> str:
         f"| joint centre position error (mean, 13 joints) | {fmt(result.get('joint_centres_pos_cm'), ' cm')} |",
         f"| joint centre velocity error (mean) | {fmt(result.get('joint_centres_vel_cms'), ' cm/s')} |",
         f"| bone origin position error (mean, 21 bones) | {fmt(result.get('pos_error_cm'), ' cm')} |",
-        f"| bone orientation error (mean) | {fmt(result.get('ori_error_deg'), ' deg')} |",
-        f"| bone orientation error, each bone's constant offset removed (mean) | "
+        f"| bone orientation error (mean, 21 bones; each bone's constant rest-frame offset removed) | "
         f"{fmt(result.get('ori_error_offset_removed_deg'), ' deg')} |",
+        f"| bone orientation error with those offsets (mean) | {fmt(result.get('ori_error_deg'), ' deg')} |",
         f"| host latency p50 / p99 / max | {fmt(result['latency_p50_ms'])} / {fmt(result['latency_p99_ms'])} / "
         f"{fmt(result['latency_max_ms'], ' ms')} |",
         f"| inputs dropped by the host | {dropped} |",
         f"| heading tracking: largest correction at the end | {_largest(result['heading_corrections_deg'])} |",
         f"| sensors left out (the keypoints contradicted them) | {_left_out(result.get('distrusted'))} |", "",
-        "Host latency: from the arrival of a frame's last input to the publication of its pose. Orientation "
-        "with the offset removed: an estimated skeleton puts a bone's frame at rest differently from the "
-        "simulation's (a constant rotation per bone over the take); without that constant, what remains is "
-        "tracking error.", ""])
+        "Host latency: from the arrival of a frame's last input to the publication of its pose. Bone "
+        "orientation: an estimated skeleton puts a bone's frame at rest differently from the simulation's (a "
+        "constant rotation per bone over the take, which an animation retargeted onto any rig absorbs); with "
+        "that constant removed, what remains is tracking error.", ""])
