@@ -1,5 +1,5 @@
-// LmProblem: evaluation of the residual blocks, the robust-loss correction and the
-// accumulation of the normal equations block pair by block pair.
+// LmProblem: the residual blocks' evaluation, the robust-loss correction, each group's
+// Jacobian and its J^T J in one product, scattered into the normal equations block by block.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -8,41 +8,6 @@
 
 namespace mocap {
 namespace {
-
-template <int Rows, int Cols>
-using RowMajorMap = Eigen::Map<const Eigen::Matrix<double, Rows, Cols, Eigen::RowMajor>>;
-
-// jtj(row, col : S1 x S2) += A^T B for A (m x S1) and B (m x S2), row-major.
-template <int M, int S1, int S2>
-void AddProduct(const double* a, const double* b, int m, int row, int col, Eigen::MatrixXd* jtj) {
-  jtj->block<S1, S2>(row, col).noalias() +=
-      RowMajorMap<M, S1>(a, m, S1).transpose() * RowMajorMap<M, S2>(b, m, S2);
-}
-
-template <int M>
-void AddProductOfSizes(const double* a, const double* b, int m, int s1, int s2, int row, int col,
-                       Eigen::MatrixXd* jtj) {
-  if (s1 == 3 && s2 == 3) return AddProduct<M, 3, 3>(a, b, m, row, col, jtj);
-  if (s1 == 3 && s2 == 6) return AddProduct<M, 3, 6>(a, b, m, row, col, jtj);
-  if (s1 == 6 && s2 == 3) return AddProduct<M, 6, 3>(a, b, m, row, col, jtj);
-  if (s1 == 6 && s2 == 6) return AddProduct<M, 6, 6>(a, b, m, row, col, jtj);
-  using Map = RowMajorMap<Eigen::Dynamic, Eigen::Dynamic>;
-  jtj->block(row, col, s1, s2).noalias() += Map(a, m, s1).transpose() * Map(b, m, s2);
-}
-
-// The normal equations' products are unrolled for the pose's block sizes (3, the root's 6)
-// and residual sizes (2: a keypoint, 3: an IMU term or a 3D point).
-void AddBlockProduct(const double* a, const double* b, int m, int s1, int s2, int row, int col,
-                     Eigen::MatrixXd* jtj) {
-  switch (m) {
-    case 2:
-      return AddProductOfSizes<2>(a, b, m, s1, s2, row, col, jtj);
-    case 3:
-      return AddProductOfSizes<3>(a, b, m, s1, s2, row, col, jtj);
-    default:
-      return AddProductOfSizes<Eigen::Dynamic>(a, b, m, s1, s2, row, col, jtj);
-  }
-}
 
 double SquaredNorm(const double* r, int m) {
   double s = 0.0;
@@ -54,31 +19,70 @@ double SquaredNorm(const double* r, int m) {
 
 LmProblem::LmProblem(int num_parameters) : num_parameters_(num_parameters) {}
 
+int LmProblem::GroupOf(const std::vector<int>& offsets, bool gram) {
+  const int n = static_cast<int>(offsets.size());
+  for (size_t g = 0; g < groups_.size(); ++g) {
+    const Group& group = groups_[g];
+    if (group.num_parameter_blocks == n && group.gram == gram &&
+        std::equal(offsets.begin(), offsets.end(),
+                   offsets_.begin() + group.first_parameter_block)) {
+      return static_cast<int>(g);
+    }
+  }
+  Group group;
+  group.first_parameter_block = static_cast<int>(offsets_.size());
+  group.num_parameter_blocks = n;
+  group.gram = gram;
+  groups_.push_back(group);
+  return static_cast<int>(groups_.size()) - 1;
+}
+
 int LmProblem::AddResidualBlock(const ceres::CostFunction* cost, const ceres::LossFunction* loss,
                                 const std::vector<int>& offsets, const Eigen::MatrixXd* gram) {
   const std::vector<int32_t>& sizes = cost->parameter_block_sizes();
+  const bool use_gram = gram != nullptr && loss == nullptr;
   Block block{cost,
               loss,
-              gram,
+              use_gram ? gram : nullptr,
               cost->num_residuals(),
               static_cast<int>(sizes.size()),
-              static_cast<int>(offsets_.size()),
-              static_cast<int>(residuals_.size()),
-              static_cast<int>(jacobians_.size())};
-  int columns = 0;
+              0,
+              GroupOf(offsets, use_gram),
+              0};
+  block.first_parameter_block = static_cast<int>(offsets_.size());
+  Group& group = groups_[block.group];
+  block.row = group.rows;
+  group.rows += block.num_residuals;
+  group.columns = 0;
   for (size_t k = 0; k < sizes.size(); ++k) {
     offsets_.push_back(offsets[k]);
     sizes_.push_back(sizes[k]);
-    columns += sizes[k];
+    group.columns += sizes[k];
   }
-  residuals_.resize(residuals_.size() + block.num_residuals);
-  jacobians_.resize(jacobians_.size() + block.num_residuals * columns);
+  if (use_gram) group.grams.push_back(gram);
   scratch_.resize(std::max<size_t>(scratch_.size(), block.num_residuals));
+  int columns = 0;
+  for (int32_t size : sizes) columns += size;
+  block_jacobian_.resize(std::max<size_t>(block_jacobian_.size(), block.num_residuals * columns));
   parameters_.resize(std::max<size_t>(parameters_.size(), sizes.size()));
   jacobian_blocks_.resize(parameters_.size());
   blocks_.push_back(block);
   rho_.push_back(0.0);
+  laid_out_ = false;
   return static_cast<int>(blocks_.size()) - 1;
+}
+
+void LmProblem::Layout() {
+  int residuals = 0, jacobians = 0;
+  for (Group& group : groups_) {
+    group.residual_start = residuals;
+    group.jacobian_start = jacobians;
+    residuals += group.rows;
+    jacobians += group.rows * group.columns;
+  }
+  residuals_.resize(residuals);
+  jacobians_.resize(jacobians);
+  laid_out_ = true;
 }
 
 std::vector<int> LmProblem::offsets(int i) const {
@@ -89,7 +93,7 @@ std::vector<int> LmProblem::offsets(int i) const {
 
 bool LmProblem::EvaluateBlock(const Block& block, const double* x, double* residuals, bool jacobian,
                               double rho[3]) {
-  double* next = jacobians_.data() + block.jacobian_start;
+  double* next = block_jacobian_.data();
   for (int k = 0; k < block.num_parameter_blocks; ++k) {
     parameters_[k] = x + offsets_[block.first_parameter_block + k];
     jacobian_blocks_[k] = next;
@@ -109,6 +113,7 @@ bool LmProblem::EvaluateBlock(const Block& block, const double* x, double* resid
 }
 
 bool LmProblem::Cost(const double* x, double* cost) {
+  if (!laid_out_) Layout();
   double sum = 0.0;
   for (const Block& block : blocks_) {
     double rho[3];
@@ -120,6 +125,7 @@ bool LmProblem::Cost(const double* x, double* cost) {
 }
 
 void LmProblem::EvaluateBlockCosts(const double* x) {
+  if (!laid_out_) Layout();
   for (size_t i = 0; i < blocks_.size(); ++i) {
     double rho[3];
     const bool ok = EvaluateBlock(blocks_[i], x, scratch_.data(), false, rho);
@@ -129,13 +135,14 @@ void LmProblem::EvaluateBlockCosts(const double* x) {
 }
 
 bool LmProblem::Linearize(const double* x, double* cost) {
+  if (!laid_out_) Layout();
   double sum = 0.0;
   for (size_t i = 0; i < blocks_.size(); ++i) {
     const Block& block = blocks_[i];
-    double* r = residuals_.data() + block.residual_start;
+    double* r = residuals_.data() + groups_[block.group].residual_start + block.row;
     double rho[3];
     if (!EvaluateBlock(block, x, r, true, rho)) return false;
-    Correct(block, SquaredNorm(r, block.num_residuals), rho);
+    Correct(block, SquaredNorm(r, block.num_residuals), rho, r);
     rho_[i] = rho[0];
     sum += rho[0];
   }
@@ -158,69 +165,82 @@ bool LmProblem::Linearize(const double* x, double* cost) {
 // term would make the model lose its positive definiteness (the square root may not even be
 // real); there alpha = 0: r and J are both scaled by sqrt(rho'), a reweighted Gauss-Newton
 // step whose gradient is still exact. The cost itself is always the exact rho.
-void LmProblem::Correct(const Block& block, double s, const double rho[3]) {
-  if (block.loss == nullptr) return;
+void LmProblem::Correct(const Block& block, double s, const double rho[3], double* r) {
   const int m = block.num_residuals;
-  const double sqrt_rho1 = std::sqrt(std::max(rho[1], 0.0));
-  double alpha = 0.0, alpha_over_s = 0.0;
-  if (s > 0.0 && rho[2] > 0.0 && rho[1] > 0.0) {
-    alpha = 1.0 - std::sqrt(1.0 + 2.0 * s * rho[2] / rho[1]);
-    alpha_over_s = alpha / s;
-  }
-  double* r = residuals_.data() + block.residual_start;
-  double* jk = jacobians_.data() + block.jacobian_start;
-  for (int k = 0; k < block.num_parameter_blocks; ++k) {  // J: one m x size row-major per block
-    const int size = sizes_[block.first_parameter_block + k];
-    for (int c = 0; c < size; ++c) {
-      double rtj = 0.0;  // r^T J[:, c], of the uncorrected J and r
-      for (int row = 0; row < m; ++row) rtj += r[row] * jk[row * size + c];
-      const double shift = alpha_over_s * rtj;
-      for (int row = 0; row < m; ++row)
-        jk[row * size + c] = sqrt_rho1 * (jk[row * size + c] - shift * r[row]);
-    }
-    jk += m * size;
-  }
-  const double beta = sqrt_rho1 / (1.0 - alpha);
-  for (int row = 0; row < m; ++row) r[row] *= beta;
-}
-
-void LmProblem::AddBlock(const Block& block, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const {
-  const int m = block.num_residuals;
-  const int* offsets = offsets_.data() + block.first_parameter_block;
-  const int* sizes = sizes_.data() + block.first_parameter_block;
-  const double* r = residuals_.data() + block.residual_start;
-  const double* j = jacobians_.data() + block.jacobian_start;
-  const bool use_gram = block.gram != nullptr && block.loss == nullptr;
-  for (int k = 0, start_k = 0, column_k = 0; k < block.num_parameter_blocks; ++k) {
-    const double* jk = j + start_k;
-    jtr->segment(offsets[k], sizes[k]).noalias() +=
-        RowMajorMap<Eigen::Dynamic, Eigen::Dynamic>(jk, m, sizes[k]).transpose() *
-        Eigen::Map<const Eigen::VectorXd>(r, m);
-    for (int l = k, start_l = start_k, column_l = column_k; l < block.num_parameter_blocks; ++l) {
-      // Only the upper triangle: the block pair goes where its row offset is the smaller.
-      const bool in_order = offsets[k] <= offsets[l];
-      const int a = in_order ? k : l, b = in_order ? l : k;
-      if (use_gram) {
-        const int ca = in_order ? column_k : column_l, cb = in_order ? column_l : column_k;
-        jtj->block(offsets[a], offsets[b], sizes[a], sizes[b]) +=
-            block.gram->block(ca, cb, sizes[a], sizes[b]);
-      } else {
-        const double* ja = in_order ? jk : j + start_l;
-        const double* jb = in_order ? j + start_l : jk;
-        AddBlockProduct(ja, jb, m, sizes[a], sizes[b], offsets[a], offsets[b], jtj);
+  double scale = 1.0;  // of J, as it is copied to the group's
+  if (block.loss != nullptr) {
+    const double sqrt_rho1 = std::sqrt(std::max(rho[1], 0.0));
+    double alpha = 0.0;
+    if (s > 0.0 && rho[2] > 0.0 && rho[1] > 0.0) {
+      alpha = 1.0 - std::sqrt(1.0 + 2.0 * s * rho[2] / rho[1]);
+      // J <- sqrt(rho') (J - (alpha / s) r (r^T J)), column by column of each block.
+      for (int k = 0; k < block.num_parameter_blocks; ++k) {
+        const int size = sizes_[block.first_parameter_block + k];
+        double* j = jacobian_blocks_[k];  // m x size, row-major
+        for (int c = 0; c < size; ++c) {
+          double rtj = 0.0;
+          for (int row = 0; row < m; ++row) rtj += r[row] * j[row * size + c];
+          for (int row = 0; row < m; ++row)
+            j[row * size + c] = sqrt_rho1 * (j[row * size + c] - alpha / s * rtj * r[row]);
+        }
       }
-      start_l += m * sizes[l];
-      column_l += sizes[l];
+    } else {
+      scale = sqrt_rho1;
     }
-    start_k += m * sizes[k];
-    column_k += sizes[k];
+    const double beta = sqrt_rho1 / (1.0 - alpha);
+    for (int row = 0; row < m; ++row) r[row] *= beta;
+  }
+  // Into the group's column-major Jacobian, scaled.
+  const Group& group = groups_[block.group];
+  double* column = jacobians_.data() + group.jacobian_start + block.row;
+  for (int k = 0; k < block.num_parameter_blocks; ++k) {
+    const int size = sizes_[block.first_parameter_block + k];
+    const double* j = jacobian_blocks_[k];
+    for (int c = 0; c < size; ++c, column += group.rows) {
+      for (int row = 0; row < m; ++row) column[row] = scale * j[row * size + c];
+    }
   }
 }
 
-void LmProblem::NormalEquations(Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const {
+void LmProblem::AddGroup(const Group& group, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) {
+  const Eigen::Map<const Eigen::MatrixXd> j(jacobians_.data() + group.jacobian_start, group.rows,
+                                            group.columns);
+  const Eigen::Map<const Eigen::VectorXd> r(residuals_.data() + group.residual_start, group.rows);
+  gradient_.noalias() = j.transpose() * r;
+  if (!group.gram) {  // the lower triangle of the group's J^T J, in one product
+    gram_.setZero(group.columns, group.columns);
+    gram_.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
+  }
+  const int* offsets = offsets_.data() + group.first_parameter_block;
+  const int* sizes = sizes_.data() + group.first_parameter_block;
+  for (int k = 0, ck = 0; k < group.num_parameter_blocks; ck += sizes[k], ++k) {
+    jtr->segment(offsets[k], sizes[k]) += gradient_.segment(ck, sizes[k]);
+    for (int l = k, cl = ck; l < group.num_parameter_blocks; cl += sizes[l], ++l) {
+      // Only jtj's upper triangle is kept: a pair goes where its row offset is the smaller.
+      auto out = offsets[k] <= offsets[l] ? jtj->block(offsets[k], offsets[l], sizes[k], sizes[l])
+                                          : jtj->block(offsets[l], offsets[k], sizes[l], sizes[k]);
+      const bool in_order = offsets[k] <= offsets[l];
+      if (group.gram) {
+        for (const Eigen::MatrixXd* g : group.grams) {
+          if (in_order) {
+            out += g->block(ck, cl, sizes[k], sizes[l]);
+          } else {
+            out += g->block(cl, ck, sizes[l], sizes[k]);
+          }
+        }
+      } else if (in_order) {  // J_k^T J_l, the transpose of the lower block (l, k)
+        out += gram_.block(cl, ck, sizes[l], sizes[k]).transpose();
+      } else {
+        out += gram_.block(cl, ck, sizes[l], sizes[k]);
+      }
+    }
+  }
+}
+
+void LmProblem::NormalEquations(Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) {
   jtj->setZero(num_parameters_, num_parameters_);
   jtr->setZero(num_parameters_);
-  for (const Block& block : blocks_) AddBlock(block, jtj, jtr);
+  for (const Group& group : groups_) AddGroup(group, jtj, jtr);
 }
 
 }  // namespace mocap

@@ -2,8 +2,11 @@
 // analytic Jacobians, optional ceres::LossFunction) over segments of one parameter vector x.
 // The normal equations are accumulated block pair by block pair into a dense
 // num_parameters x num_parameters matrix: a residual on bone b touches only the blocks of
-// b's chain (kinematics.h), so a keypoint's 2 rows cost its chain's few 3x3 products instead
-// of a row of the full Jacobian's outer product. Internal to the solver.
+// b's chain (kinematics.h). Residual blocks over the same parameter blocks (the keypoints
+// and sensors of one bone) form a group whose Jacobian, rows stacked, is one dense matrix
+// of its chain's columns; J^T J costs one symmetric product per group (a 24-column chain
+// instead of the 66 columns of a dense Jacobian), added into the normal equations block
+// pair by block pair. Internal to the solver.
 //
 // The iteration is Ceres' trust-region Levenberg-Marquardt with its defaults (so the
 // solver's tolerances keep the meaning and the tuning they were given on Ceres):
@@ -84,9 +87,9 @@ class LmProblem {
   // Residuals and Jacobians at x, corrected for the losses (lm_problem.cc), and each
   // block's rho(|r|^2); false as Cost.
   bool Linearize(const double* x, double* cost);
-  // The last Linearize's normal equations: the upper triangle of J^T J (the lower one is
-  // not written) and J^T r.
-  void NormalEquations(Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const;
+  // The last Linearize's normal equations: the upper triangle of J^T J (the rest of it is
+  // not meaningful) and J^T r.
+  void NormalEquations(Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr);
   // rho(|r_i|^2) of each block at x (infinite for a block that fails there).
   void EvaluateBlockCosts(const double* x);
   // rho(|r_i|^2) of block i at costs_at(): the point of the last Linearize or
@@ -98,26 +101,44 @@ class LmProblem {
   struct Block {
     const ceres::CostFunction* cost;
     const ceres::LossFunction* loss;
-    const Eigen::MatrixXd* gram;
+    const Eigen::MatrixXd* gram;  // used: given and the loss trivial
     int num_residuals, num_parameter_blocks;
     int first_parameter_block;  // into offsets_, sizes_
-    int residual_start, jacobian_start;
+    int group, row;             // its group and first row there
   };
-  // Evaluates a block at x into `residuals` (and its Jacobian buffer): rho, rho', rho'' of
-  // its |r|^2. False when the cost function fails or rho is not finite.
+  // Blocks over the same parameter blocks in the same order (and all with or all without a
+  // used Gram). Residuals: `rows` from residual_start; Jacobian: rows x columns,
+  // column-major, from jacobian_start.
+  struct Group {
+    int first_parameter_block, num_parameter_blocks;  // those of its first block
+    bool gram;
+    int rows = 0, columns = 0, residual_start = 0, jacobian_start = 0;
+    std::vector<const Eigen::MatrixXd*> grams;
+  };
+  int GroupOf(const std::vector<int>& offsets, bool gram);
+  // Places the groups' rows in the residual and Jacobian buffers (after blocks were added).
+  void Layout();
+  // Evaluates a block at x into `residuals` (and its Jacobian into jacobian_blocks_): rho,
+  // rho', rho'' of its |r|^2. False when the cost function fails or rho is not finite.
   bool EvaluateBlock(const Block& block, const double* x, double* residuals, bool jacobian,
                      double rho[3]);
-  // Replaces the block's residuals and Jacobian by their robust-loss corrections.
-  void Correct(const Block& block, double squared_norm, const double rho[3]);
-  void AddBlock(const Block& block, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr) const;
+  // Replaces the block's residuals r by their robust-loss corrections and puts its
+  // corrected Jacobian into its group's.
+  void Correct(const Block& block, double squared_norm, const double rho[3], double* r);
+  void AddGroup(const Group& group, Eigen::MatrixXd* jtj, Eigen::VectorXd* jtr);
 
   int num_parameters_;
+  bool laid_out_ = false;
   std::vector<Block> blocks_;
+  std::vector<Group> groups_;
   std::vector<int> offsets_, sizes_;
   std::vector<double> residuals_, jacobians_, rho_;
   std::vector<double> scratch_;            // residuals of a cost-only evaluation
   std::vector<const double*> parameters_;  // scratch: one block's parameter pointers
   std::vector<double*> jacobian_blocks_;   // scratch: one block's Jacobian pointers
+  std::vector<double> block_jacobian_;     // scratch: one block's Jacobian
+  Eigen::MatrixXd gram_;                   // scratch: one group's J^T J
+  Eigen::VectorXd gradient_;               // scratch: one group's J^T r
   Eigen::VectorXd costs_at_;
 };
 
