@@ -9,6 +9,26 @@
 namespace mocap {
 namespace {
 
+// to (m x size, column-major, column stride `stride`) = scale * from (m x size, row-major).
+template <int M, int Size>
+void CopyScaled(const double* from, double scale, int stride, double* to) {
+  using From = Eigen::Map<const Eigen::Matrix<double, M, Size, Eigen::RowMajor>>;
+  using To = Eigen::Map<Eigen::Matrix<double, M, Size>, 0, Eigen::OuterStride<>>;
+  To(to, M, Size, Eigen::OuterStride<>(stride)) = scale * From(from, M, Size);
+}
+
+// Unrolled for a keypoint's 2 rows and a 3D term's 3 over the pose's blocks (3, the root's 6).
+void CopyScaled(const double* from, int m, int size, double scale, int stride, double* to) {
+  if (m == 2 && size == 3) return CopyScaled<2, 3>(from, scale, stride, to);
+  if (m == 2 && size == 6) return CopyScaled<2, 6>(from, scale, stride, to);
+  if (m == 3 && size == 3) return CopyScaled<3, 3>(from, scale, stride, to);
+  if (m == 3 && size == 6) return CopyScaled<3, 6>(from, scale, stride, to);
+  using From =
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+  using To = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+  To(to, m, size, Eigen::OuterStride<>(stride)) = scale * From(from, m, size);
+}
+
 double SquaredNorm(const double* r, int m) {
   double s = 0.0;
   for (int k = 0; k < m; ++k) s += r[k] * r[k];
@@ -17,16 +37,18 @@ double SquaredNorm(const double* r, int m) {
 
 }  // namespace
 
-LmProblem::LmProblem(int num_parameters) : num_parameters_(num_parameters) {}
+LmProblem::LmProblem(int num_parameters)
+    : num_parameters_(num_parameters), groups_by_first_offset_(std::max(num_parameters, 1)) {}
 
 int LmProblem::GroupOf(const std::vector<int>& offsets, bool gram) {
   const int n = static_cast<int>(offsets.size());
-  for (size_t g = 0; g < groups_.size(); ++g) {
+  std::vector<int>& candidates = groups_by_first_offset_[n > 0 ? offsets[0] : 0];
+  for (int g : candidates) {
     const Group& group = groups_[g];
     if (group.num_parameter_blocks == n && group.gram == gram &&
         std::equal(offsets.begin(), offsets.end(),
                    offsets_.begin() + group.first_parameter_block)) {
-      return static_cast<int>(g);
+      return g;
     }
   }
   Group group;
@@ -34,7 +56,8 @@ int LmProblem::GroupOf(const std::vector<int>& offsets, bool gram) {
   group.num_parameter_blocks = n;
   group.gram = gram;
   groups_.push_back(group);
-  return static_cast<int>(groups_.size()) - 1;
+  candidates.push_back(static_cast<int>(groups_.size()) - 1);
+  return candidates.back();
 }
 
 int LmProblem::AddResidualBlock(const ceres::CostFunction* cost, const ceres::LossFunction* loss,
@@ -80,7 +103,7 @@ void LmProblem::Layout() {
     residuals += group.rows;
     jacobians += group.rows * group.columns;
   }
-  residuals_.resize(residuals);
+  residuals_.resize(residuals);  // (Eigen's resize leaves them uninitialised)
   jacobians_.resize(jacobians);
   laid_out_ = true;
 }
@@ -195,10 +218,8 @@ void LmProblem::Correct(const Block& block, double s, const double rho[3], doubl
   double* column = jacobians_.data() + group.jacobian_start + block.row;
   for (int k = 0; k < block.num_parameter_blocks; ++k) {
     const int size = sizes_[block.first_parameter_block + k];
-    const double* j = jacobian_blocks_[k];
-    for (int c = 0; c < size; ++c, column += group.rows) {
-      for (int row = 0; row < m; ++row) column[row] = scale * j[row * size + c];
-    }
+    CopyScaled(jacobian_blocks_[k], m, size, scale, group.rows, column);
+    column += size * group.rows;
   }
 }
 

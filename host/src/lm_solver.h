@@ -132,7 +132,9 @@ class LmProblem {
   std::vector<Block> blocks_;
   std::vector<Group> groups_;
   std::vector<int> offsets_, sizes_;
-  std::vector<double> residuals_, jacobians_, rho_;
+  std::vector<std::vector<int>> groups_by_first_offset_;
+  Eigen::VectorXd residuals_, jacobians_;
+  std::vector<double> rho_;
   std::vector<double> scratch_;            // residuals of a cost-only evaluation
   std::vector<const double*> parameters_;  // scratch: one block's parameter pointers
   std::vector<double*> jacobian_blocks_;   // scratch: one block's Jacobian pointers
