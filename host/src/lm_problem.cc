@@ -29,6 +29,40 @@ void CopyScaled(const double* from, int m, int size, double scale, int stride, d
   To(to, m, size, Eigen::OuterStride<>(stride)) = scale * From(from, m, size);
 }
 
+// to(row, col : R x C) += from(fr, fc : R x C), or from(fr, fc : C x R)^T.
+template <int R, int C>
+void AddBlock(const Eigen::MatrixXd& from, int fr, int fc, bool transposed, int row, int col,
+              Eigen::MatrixXd* to) {
+  if (transposed) {
+    to->block<R, C>(row, col) += from.block<C, R>(fr, fc).transpose();
+  } else {
+    to->block<R, C>(row, col) += from.block<R, C>(fr, fc);
+  }
+}
+
+// Unrolled for the pose's block sizes.
+void AddBlock(const Eigen::MatrixXd& from, int fr, int fc, bool transposed, int rows, int cols,
+              int row, int col, Eigen::MatrixXd* to) {
+  if (rows == 3 && cols == 3) return AddBlock<3, 3>(from, fr, fc, transposed, row, col, to);
+  if (rows == 3 && cols == 6) return AddBlock<3, 6>(from, fr, fc, transposed, row, col, to);
+  if (rows == 6 && cols == 3) return AddBlock<6, 3>(from, fr, fc, transposed, row, col, to);
+  if (rows == 6 && cols == 6) return AddBlock<6, 6>(from, fr, fc, transposed, row, col, to);
+  if (transposed) {
+    to->block(row, col, rows, cols) += from.block(fr, fc, cols, rows).transpose();
+  } else {
+    to->block(row, col, rows, cols) += from.block(fr, fc, rows, cols);
+  }
+}
+
+void AddSegment(const Eigen::VectorXd& from, int start, int size, int to_start,
+                Eigen::VectorXd* to) {
+  if (size == 3) {
+    to->segment<3>(to_start) += from.segment<3>(start);
+  } else {
+    to->segment(to_start, size) += from.segment(start, size);
+  }
+}
+
 double SquaredNorm(const double* r, int m) {
   double s = 0.0;
   for (int k = 0; k < m; ++k) s += r[k] * r[k];
@@ -235,24 +269,17 @@ void LmProblem::AddGroup(const Group& group, Eigen::MatrixXd* jtj, Eigen::Vector
   const int* offsets = offsets_.data() + group.first_parameter_block;
   const int* sizes = sizes_.data() + group.first_parameter_block;
   for (int k = 0, ck = 0; k < group.num_parameter_blocks; ck += sizes[k], ++k) {
-    jtr->segment(offsets[k], sizes[k]) += gradient_.segment(ck, sizes[k]);
+    AddSegment(gradient_, ck, sizes[k], offsets[k], jtr);
     for (int l = k, cl = ck; l < group.num_parameter_blocks; cl += sizes[l], ++l) {
-      // Only jtj's upper triangle is kept: a pair goes where its row offset is the smaller.
-      auto out = offsets[k] <= offsets[l] ? jtj->block(offsets[k], offsets[l], sizes[k], sizes[l])
-                                          : jtj->block(offsets[l], offsets[k], sizes[l], sizes[k]);
+      // Only jtj's upper triangle is kept: the pair goes to (a, b), the smaller offset first.
       const bool in_order = offsets[k] <= offsets[l];
+      const int a = in_order ? k : l, b = in_order ? l : k;
       if (group.gram) {
-        for (const Eigen::MatrixXd* g : group.grams) {
-          if (in_order) {
-            out += g->block(ck, cl, sizes[k], sizes[l]);
-          } else {
-            out += g->block(cl, ck, sizes[l], sizes[k]);
-          }
-        }
-      } else if (in_order) {  // J_k^T J_l, the transpose of the lower block (l, k)
-        out += gram_.block(cl, ck, sizes[l], sizes[k]).transpose();
-      } else {
-        out += gram_.block(cl, ck, sizes[l], sizes[k]);
+        for (const Eigen::MatrixXd* g : group.grams)
+          AddBlock(*g, in_order ? ck : cl, in_order ? cl : ck, false, sizes[a], sizes[b],
+                   offsets[a], offsets[b], jtj);
+      } else {  // from the lower block (l, k), J_l^T J_k: transposed when k comes first
+        AddBlock(gram_, cl, ck, in_order, sizes[a], sizes[b], offsets[a], offsets[b], jtj);
       }
     }
   }
