@@ -1,28 +1,27 @@
 // Levenberg-Marquardt for the per-frame pose: residual blocks (ceres::CostFunction with
 // analytic Jacobians, optional ceres::LossFunction) over segments of one parameter vector x.
-// The normal equations are accumulated block pair by block pair into a dense
-// num_parameters x num_parameters matrix: a residual on bone b touches only the blocks of
-// b's chain (kinematics.h). Residual blocks over the same parameter blocks (the keypoints
-// and sensors of one bone) form a group whose Jacobian, rows stacked, is one dense matrix
-// of its chain's columns; J^T J costs one symmetric product per group (a 24-column chain
-// instead of the 66 columns of a dense Jacobian), added into the normal equations block
-// pair by block pair. Internal to the solver.
+// A residual on bone b touches only the blocks of b's chain (kinematics.h), so the residual
+// blocks over the same parameter blocks (the keypoints and sensors of one bone) form a group
+// whose stacked Jacobian has only its chain's columns (24 at most of the pose's 66); the
+// normal equations J^T J are one symmetric product per group, added into the dense
+// num_parameters x num_parameters matrix block pair by block pair. Internal to the solver.
 //
-// The iteration is Ceres' trust-region Levenberg-Marquardt with its defaults (so the
-// solver's tolerances keep the meaning and the tuning they were given on Ceres):
+// The iteration is Ceres' trust-region Levenberg-Marquardt with its defaults, so the
+// solver's tolerances keep the meaning and the tuning they were given on Ceres:
 //   cost C(x) = 1/2 sum_i rho_i(|r_i|^2), gradient g = J^T r, H = J^T J (of the corrected r,
-//   J: LmProblem::Linearize), step (H + D / radius) dx = -g with D = diag(H) clamped to
+//   J: lm_problem.cc), step (H + D / radius) dx = -g with D = diag(H) clamped to
 //   [min_diagonal, max_diagonal] in Jacobi-scaled columns (scale 1 / (1 + |column|) at the
-//   start); a step is accepted when (C(x) - C(x + dx)) / model decrease > min_relative_decrease,
-//   and the radius grows by 1 / max(1/3, 1 - (2 q - 1)^3) (q that ratio) or, on a rejection,
-//   shrinks by a factor 2, 4, 8, ... A step whose evaluation fails (a residual returns false
-//   or the cost is not finite) is rejected like one that raises the cost. It stops
-//   (converged) when |C(x) - C(x + dx)| <= function_tolerance * C(x) or
-//   |dx| <= parameter_tolerance * (|x| + parameter_tolerance) — the step is then not taken,
-//   as in Ceres — or max|g| <= gradient_tolerance after an accepted step (or at the start),
-//   or the radius falls below min_radius; at max_iterations steps (accepted or not) it stops
-//   with kIterationLimit. It fails when x's own residuals or Jacobians cannot be evaluated
-//   or the normal equations cannot be solved max_consecutive_invalid_steps times in a row.
+//   start). A step is taken when q = (C(x) - C(x + dx)) / (its model's decrease) exceeds
+//   min_relative_decrease; the radius then grows by 1 / max(1/3, 1 - (2 q - 1)^3), else it
+//   shrinks by 2, 4, 8, ... A step whose cost cannot be evaluated (a residual returns false,
+//   or the cost is not finite) is rejected like one that raises the cost; one the damped
+//   equations give no descent for (Cholesky fails, the model does not decrease) likewise,
+//   up to max_consecutive_invalid_steps in a row (then kFailed). It stops, converged, when
+//   |C(x) - C(x + dx)| <= function_tolerance C(x) or |dx| <= parameter_tolerance
+//   (|x| + parameter_tolerance) (that step is not taken, as in Ceres), when
+//   max |g| <= gradient_tolerance, or when the radius falls below min_radius; with
+//   kIterationLimit after max_iterations steps; with kFailed when the residuals or
+//   Jacobians at x itself cannot be evaluated or are not finite.
 #ifndef MOCAP_SRC_LM_SOLVER_H_
 #define MOCAP_SRC_LM_SOLVER_H_
 
