@@ -39,7 +39,8 @@ ceres::LossFunction* FrameProblem::Loss(Term term, const TermOptions& options) {
 
 void FrameProblem::Add(Term term, const ceres::CostFunction* cost, const TermOptions& options,
                        const std::vector<int>& offsets, const Eigen::MatrixXd* gram) {
-  blocks_[term].push_back(problem_.AddResidualBlock(cost, Loss(term, options), offsets, gram));
+  const int block = problem_.AddResidualBlock(cost, Loss(term, options), offsets, gram);
+  if (block >= 0) blocks_[term].push_back(block);  // (the chains' offsets always fit theta)
 }
 
 int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,

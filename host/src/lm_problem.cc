@@ -97,10 +97,16 @@ int LmProblem::GroupOf(const std::vector<int>& offsets, bool gram) {
 int LmProblem::AddResidualBlock(const ceres::CostFunction* cost, const ceres::LossFunction* loss,
                                 const std::vector<int>& offsets, const Eigen::MatrixXd* gram) {
   const std::vector<int32_t>& sizes = cost->parameter_block_sizes();
+  if (offsets.size() != sizes.size()) return -1;
+  int columns = 0;
+  for (size_t k = 0; k < sizes.size(); ++k) {
+    if (offsets[k] < 0 || sizes[k] <= 0 || offsets[k] + sizes[k] > num_parameters_) return -1;
+    columns += sizes[k];
+  }
+  if (gram != nullptr && (gram->rows() != columns || gram->cols() != columns)) return -1;
   const bool use_gram = gram != nullptr && loss == nullptr;
   Block block{cost,
               loss,
-              use_gram ? gram : nullptr,
               cost->num_residuals(),
               static_cast<int>(sizes.size()),
               0,
@@ -110,16 +116,11 @@ int LmProblem::AddResidualBlock(const ceres::CostFunction* cost, const ceres::Lo
   Group& group = groups_[block.group];
   block.row = group.rows;
   group.rows += block.num_residuals;
-  group.columns = 0;
-  for (size_t k = 0; k < sizes.size(); ++k) {
-    offsets_.push_back(offsets[k]);
-    sizes_.push_back(sizes[k]);
-    group.columns += sizes[k];
-  }
+  group.columns = columns;
+  offsets_.insert(offsets_.end(), offsets.begin(), offsets.end());
+  sizes_.insert(sizes_.end(), sizes.begin(), sizes.end());
   if (use_gram) group.grams.push_back(gram);
   scratch_.resize(std::max<size_t>(scratch_.size(), block.num_residuals));
-  int columns = 0;
-  for (int32_t size : sizes) columns += size;
   block_jacobian_.resize(std::max<size_t>(block_jacobian_.size(), block.num_residuals * columns));
   parameters_.resize(std::max<size_t>(parameters_.size(), sizes.size()));
   jacobian_blocks_.resize(parameters_.size());

@@ -71,7 +71,9 @@ class LmProblem {
   // cost->parameter_block_sizes(); the blocks of one residual must not overlap. cost and
   // loss (null: trivial, rho(s) = s) are borrowed. gram, when given, is the cost's J^T J
   // (its Jacobian does not depend on x, as a linear residual's): with a trivial loss it is
-  // added as it is instead of being accumulated at every linearisation. Returns its index.
+  // added as it is instead of being accumulated at every linearisation. Returns its index,
+  // or -1 (nothing added) when the offsets do not fit the cost's blocks into x or the Gram
+  // is not of their size.
   int AddResidualBlock(const ceres::CostFunction* cost, const ceres::LossFunction* loss,
                        const std::vector<int>& offsets, const Eigen::MatrixXd* gram = nullptr);
 
@@ -100,7 +102,6 @@ class LmProblem {
   struct Block {
     const ceres::CostFunction* cost;
     const ceres::LossFunction* loss;
-    const Eigen::MatrixXd* gram;  // used: given and the loss trivial
     int num_residuals, num_parameter_blocks;
     int first_parameter_block;  // into offsets_, sizes_
     int group, row;             // its group and first row there

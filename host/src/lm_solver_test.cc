@@ -129,6 +129,18 @@ TEST(LmSolver, FailsWhenTheStartCannotBeEvaluated) {
   EXPECT_EQ(x, -1.0);
 }
 
+TEST(LmSolver, RefusesBlocksThatDoNotFitX) {
+  ExponentialResidual cost(1.0, 1.0);
+  LmProblem problem(2);
+  EXPECT_EQ(problem.AddResidualBlock(&cost, nullptr, {0}), -1);     // one offset for two blocks
+  EXPECT_EQ(problem.AddResidualBlock(&cost, nullptr, {0, 2}), -1);  // past the end of x
+  EXPECT_EQ(problem.AddResidualBlock(&cost, nullptr, {1, -1}), -1);
+  const Eigen::MatrixXd gram = Eigen::MatrixXd::Identity(3, 3);  // the blocks have 2 columns
+  EXPECT_EQ(problem.AddResidualBlock(&cost, nullptr, {1, 0}, &gram), -1);
+  EXPECT_EQ(problem.num_residual_blocks(), 0);
+  EXPECT_EQ(problem.AddResidualBlock(&cost, nullptr, {1, 0}), 0);
+}
+
 TEST(LmSolver, ReportsTheIterationLimit) {
   LogResidual cost;
   LmProblem problem(1);
