@@ -54,7 +54,7 @@ py::dict Costs(const SolveResult& r) {
 
 py::dict Timings(const SolveResult& r) {
   const SolveTimings& t = r.timings;
-  return py::dict(py::arg("ceres") = t.ceres, py::arg("linear_solver") = t.linear_solver,
+  return py::dict(py::arg("total") = t.total, py::arg("linear_solver") = t.linear_solver,
                   py::arg("jacobian_evaluation") = t.jacobian_evaluation,
                   py::arg("residual_evaluation") = t.residual_evaluation);
 }

@@ -2,22 +2,12 @@
 
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/orientation_residual.h"
+#include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
 #include "mocap/solver.h"
 
 namespace mocap {
-namespace {
-
-ceres::Problem::Options BorrowingProblem() {
-  ceres::Problem::Options o;
-  o.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  o.disable_all_safety_checks = true;  // the blocks are ours and consistent by construction
-  return o;
-}
-
-}  // namespace
 
 ceres::LossFunction* MakeLoss(const TermOptions& t) {
   switch (t.loss) {
@@ -32,9 +22,13 @@ ceres::LossFunction* MakeLoss(const TermOptions& t) {
 }
 
 FrameProblem::FrameProblem(const Skeleton& skeleton, double* theta)
-    : skeleton_(skeleton), theta_(theta), fk_(&skeleton), problem_(BorrowingProblem()) {
+    : skeleton_(skeleton),
+      theta_(theta),
+      fk_(&skeleton),
+      problem_(skeleton.pose_dim()),
+      chain_offsets_(skeleton.num_bones()) {
   for (int b = 0; b < skeleton.num_bones(); ++b) {
-    problem_.AddParameterBlock(theta + BlockOffset(b), BlockSize(b));
+    for (int j : skeleton.Chain(b)) chain_offsets_[b].push_back(BlockOffset(j));
   }
 }
 
@@ -43,9 +37,10 @@ ceres::LossFunction* FrameProblem::Loss(Term term, const TermOptions& options) {
   return losses_[term].get();
 }
 
-void FrameProblem::Add(Term term, ceres::CostFunction* cost, const TermOptions& options,
-                       const std::vector<double*>& blocks) {
-  blocks_[term].push_back(problem_.AddResidualBlock(cost, Loss(term, options), blocks));
+void FrameProblem::Add(Term term, const ceres::CostFunction* cost, const TermOptions& options,
+                       const std::vector<int>& offsets, const Eigen::MatrixXd* gram) {
+  const int block = problem_.AddResidualBlock(cost, Loss(term, options), offsets, gram);
+  if (block >= 0) blocks_[term].push_back(block);  // (the chains' offsets always fit theta)
 }
 
 int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
@@ -64,7 +59,7 @@ int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
     }
     auto* cost = new PositionResidual(&fk_, &cam, site, d.pixel, d.confidence, options.weight);
     owned_.emplace_back(cost);
-    Add(kPositionTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+    Add(kPositionTerm, cost, options, chain_offsets_[site.bone]);
   }
   return behind;
 }
@@ -73,7 +68,7 @@ void FrameProblem::AddOrientationTerm(const ImuSite& site, const Eigen::Matrix3d
                                       const TermOptions& options) {
   auto* cost = new OrientationResidual(&fk_, site, measured_world, options.weight);
   owned_.emplace_back(cost);
-  Add(kOrientationTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+  Add(kOrientationTerm, cost, options, chain_offsets_[site.bone]);
 }
 
 void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3d& x1,
@@ -82,36 +77,38 @@ void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3
                                        const TermOptions& options) {
   auto* cost = new AccelerationResidual(&fk_, site, x1, x0, h1, h2, measured_world, options.weight);
   owned_.emplace_back(cost);
-  Add(kAccelerationTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+  Add(kAccelerationTerm, cost, options, chain_offsets_[site.bone]);
 }
 
 void FrameProblem::AddPointTerm(const Site& site, const Eigen::Vector3d& target,
                                 const TermOptions& options) {
   auto* cost = new PointResidual(&fk_, site, target, options.weight);
   owned_.emplace_back(cost);
-  Add(kPointTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+  Add(kPointTerm, cost, options, chain_offsets_[site.bone]);
 }
 
-void FrameProblem::AddPriorTerm(Term term, ceres::CostFunction* cost, const TermOptions& options) {
-  std::vector<double*> joints;
-  for (int b = 1; b < skeleton_.num_bones(); ++b) joints.push_back(theta_ + BlockOffset(b));
-  Add(term, cost, options, joints);
+void FrameProblem::AddPriorTerm(Term term, const LinearPriorResidual* cost,
+                                const TermOptions& options) {
+  std::vector<int> joints;
+  for (int b = 1; b < skeleton_.num_bones(); ++b) joints.push_back(BlockOffset(b));
+  Add(term, cost, options, joints, &cost->gram());
 }
 
-void FrameProblem::Solve(const ceres::Solver::Options& options, ceres::Solver::Summary* summary) {
-  ceres::Solve(options, &problem_, summary);
+LmSummary FrameProblem::Solve(const LmOptions& options) {
+  return SolveLm(options, &problem_, theta_);
 }
 
 TermCosts FrameProblem::Costs() {
+  const Eigen::Map<const Eigen::VectorXd> theta(theta_, skeleton_.pose_dim());
+  // The solve leaves its solution's block costs behind; anything else is evaluated.
+  if (problem_.costs_at().size() != theta.size() || problem_.costs_at() != theta) {
+    problem_.EvaluateBlockCosts(theta_);
+  }
   TermCosts costs;
   double* out[5] = {&costs.orientation, &costs.position, &costs.acceleration, &costs.pca_projection,
                     &costs.pca_deviation};
   for (int t = 0; t < 5; ++t) {
-    for (ceres::ResidualBlockId id : blocks_[t]) {
-      double cost = 0.0;
-      problem_.EvaluateResidualBlock(id, /*apply_loss_function=*/true, &cost, nullptr, nullptr);
-      *out[t] += 2.0 * cost;  // Ceres reports rho / 2
-    }
+    for (int i : blocks_[t]) *out[t] += problem_.block_cost(i);
   }
   return costs;
 }

@@ -1,14 +1,16 @@
-// One frame's Ceres problem: a parameter block per bone over theta, the cost terms, and
-// the cost and loss functions they use. Internal to the solver.
+// One frame's least-squares problem (lm_solver.h): a parameter block per bone over theta,
+// the cost terms, and the cost and loss functions they use. Internal to the solver.
 #ifndef MOCAP_SRC_FRAME_PROBLEM_H_
 #define MOCAP_SRC_FRAME_PROBLEM_H_
 
-#include <ceres/ceres.h>
+#include <ceres/cost_function.h>
+#include <ceres/loss_function.h>
 
 #include <array>
 #include <memory>
 #include <vector>
 
+#include "lm_solver.h"
 #include "mocap/camera.h"
 #include "mocap/initialisation.h"
 #include "mocap/kinematics.h"
@@ -18,6 +20,7 @@
 namespace mocap {
 
 struct TermOptions;
+class LinearPriorResidual;
 
 enum Term {
   kOrientationTerm,
@@ -33,7 +36,7 @@ ceres::LossFunction* MakeLoss(const TermOptions& term);
 
 class FrameProblem {
  public:
-  // theta must outlive the problem; Ceres updates it in place.
+  // theta must outlive the problem; Solve updates it in place.
   FrameProblem(const Skeleton& skeleton, double* theta);
 
   // E_P for each detection whose site is in front of its camera at theta; returns how
@@ -47,25 +50,28 @@ class FrameProblem {
                            const Eigen::Vector3d& measured_world, const TermOptions& options);
   void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
-  void AddPriorTerm(Term term, ceres::CostFunction* cost, const TermOptions& options);
+  void AddPriorTerm(Term term, const LinearPriorResidual* cost, const TermOptions& options);
 
   int count(Term term) const { return static_cast<int>(blocks_[term].size()); }
-  void Solve(const ceres::Solver::Options& options, ceres::Solver::Summary* summary);
+  // Levenberg-Marquardt from theta.
+  LmSummary Solve(const LmOptions& options);
   // E = sum of rho(|r|^2) of each term at the current theta.
   TermCosts Costs();
+  const LmProblem& problem() const { return problem_; }
 
  private:
   ceres::LossFunction* Loss(Term term, const TermOptions& options);
-  void Add(Term term, ceres::CostFunction* cost, const TermOptions& options,
-           const std::vector<double*>& blocks);
+  void Add(Term term, const ceres::CostFunction* cost, const TermOptions& options,
+           const std::vector<int>& offsets, const Eigen::MatrixXd* gram = nullptr);
 
   const Skeleton& skeleton_;
   double* theta_;
   KinematicsCache fk_;
-  ceres::Problem problem_;
+  LmProblem problem_;
+  std::vector<std::vector<int>> chain_offsets_;  // per bone: its chain's blocks in theta
   std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
   std::array<std::unique_ptr<ceres::LossFunction>, 6> losses_;
-  std::array<std::vector<ceres::ResidualBlockId>, 6> blocks_;
+  std::array<std::vector<int>, 6> blocks_;  // residual blocks of each term
 };
 
 }  // namespace mocap

@@ -1,5 +1,6 @@
 #include "mocap/kinematics.h"
 
+#include <cstdint>
 #include <cstring>
 
 #include "mocap/so3.h"
@@ -21,6 +22,18 @@ void ComputeBone(const Skeleton& skeleton, int b, const double* block, BodyPose*
     out->position[b] = out->position[parent] + out->rotation[parent] * skeleton.bone(b).offset;
   }
   out->axes[b] = out->rotation[b] * RightJacobian(w);
+}
+
+// Bitwise equality of n doubles, as memcmp (so a NaN parameter equals itself) but inline:
+// every residual checks its chain's blocks at every evaluation.
+bool SameBits(const double* a, const double* b, int n) {
+  for (int k = 0; k < n; ++k) {
+    uint64_t x, y;
+    std::memcpy(&x, a + k, sizeof x);
+    std::memcpy(&y, b + k, sizeof y);
+    if (x != y) return false;
+  }
+  return true;
 }
 
 void Resize(int n, BodyPose* pose) {
@@ -45,6 +58,7 @@ std::vector<double*> ChainBlocks(const Skeleton& skeleton, int b, double* theta)
 
 std::vector<int> ChainBlockSizes(const Skeleton& skeleton, int b) {
   std::vector<int> sizes;
+  sizes.reserve(skeleton.Chain(b).size());
   for (int j : skeleton.Chain(b)) sizes.push_back(BlockSize(j));
   return sizes;
 }
@@ -63,12 +77,11 @@ const BodyPose& KinematicsCache::Update(int b, double const* const* chain_blocks
     const int j = chain[i];
     const int parent = skeleton_->bone(j).parent;
     const uint64_t parent_version = parent < 0 ? 0 : version_[parent];
-    const size_t bytes = sizeof(double) * BlockSize(j);
     if (version_[j] != 0 && parent_version_[j] == parent_version &&
-        std::memcmp(key_[j].data(), chain_blocks[i], bytes) == 0) {
+        SameBits(key_[j].data(), chain_blocks[i], BlockSize(j))) {
       continue;
     }
-    std::memcpy(key_[j].data(), chain_blocks[i], bytes);
+    std::memcpy(key_[j].data(), chain_blocks[i], sizeof(double) * BlockSize(j));
     ComputeBone(*skeleton_, j, chain_blocks[i], &pose_);
     parent_version_[j] = parent_version;
     version_[j] = next_version_++;

@@ -1,7 +1,5 @@
 #include "mocap/solver.h"
 
-#include <ceres/ceres.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -32,20 +30,15 @@ const char* ToString(SolveStatus status) {
 
 namespace {
 
-// Levenberg-Marquardt on the dense normal equations: for ~70 parameters and ~700 residuals
-// this beats the sparse solvers, whose symbolic set-up is redone every frame
-// (docs/performance.md).
-ceres::Solver::Options CeresOptions(const SolverOptions& options, int max_iterations) {
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  so.dense_linear_algebra_library_type = ceres::LAPACK;
-  so.max_num_iterations = max_iterations;
-  so.function_tolerance = options.function_tolerance;
-  so.gradient_tolerance = options.gradient_tolerance;
-  so.parameter_tolerance = options.parameter_tolerance;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
-  return so;
+// Levenberg-Marquardt on normal equations accumulated over each residual's chain blocks
+// (lm_solver.h), with Ceres' trust-region defaults and tolerances (docs/performance.md).
+LmOptions LmOptionsOf(const SolverOptions& options, int max_iterations) {
+  LmOptions lm;
+  lm.max_iterations = max_iterations;
+  lm.function_tolerance = options.function_tolerance;
+  lm.gradient_tolerance = options.gradient_tolerance;
+  lm.parameter_tolerance = options.parameter_tolerance;
+  return lm;
 }
 
 bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
@@ -129,9 +122,8 @@ bool FitToPoints(const Skeleton& skeleton, const std::vector<Site>& sites,
   if (problem.count(kPointTerm) == 0) return false;
   SolverOptions fit;
   fit.function_tolerance = 1e-6;
-  ceres::Solver::Summary summary;
-  problem.Solve(CeresOptions(fit, max_iterations), &summary);
-  return summary.IsSolutionUsable() && theta->allFinite();
+  const LmSummary summary = problem.Solve(LmOptionsOf(fit, max_iterations));
+  return summary.termination != LmTermination::kFailed && theta->allFinite();
 }
 
 bool Solver::CheckCalibration(const Skeleton& skeleton, const KeypointLayout& layout,
@@ -235,20 +227,16 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     return false;
   }
 
-  ceres::Solver::Summary summary;
-  problem.Solve(CeresOptions(options_, max_iterations), &summary);
-  result->iterations = static_cast<int>(summary.iterations.size()) - 1;
-  result->timings = {1e3 * summary.total_time_in_seconds,
-                     1e3 * summary.linear_solver_time_in_seconds,
-                     1e3 * summary.jacobian_evaluation_time_in_seconds,
-                     1e3 * summary.residual_evaluation_time_in_seconds};
-  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable() ||
-      !x->allFinite()) {
+  const LmSummary summary = problem.Solve(LmOptionsOf(options_, max_iterations));
+  result->iterations = summary.iterations;
+  result->timings = {summary.total_ms, summary.linear_solver_ms, summary.jacobian_ms,
+                     summary.residual_ms};
+  if (summary.termination == LmTermination::kFailed || !x->allFinite()) {
     result->status = SolveStatus::kFailed;
     result->message = "optimiser failed: " + summary.message;
     return false;
   }
-  if (summary.termination_type == ceres::NO_CONVERGENCE) result->flags |= kIterationLimit;
+  if (summary.termination == LmTermination::kIterationLimit) result->flags |= kIterationLimit;
   if (problem.count(kPositionTerm) == 0) result->flags |= kPositionUnconstrained;
   if (problem.count(kAccelerationTerm) == 0) result->flags |= kAccelerationUnavailable;
   result->costs = problem.Costs();

@@ -158,6 +158,30 @@ TEST(Solver, TermsCanBeSwitchedOffAndReportTheirCosts) {
   EXPECT_GT(r.costs.position, 0.0);  // so the data gives way a little
 }
 
+// One iteration from 10 degrees away stops at the limit, flagged; the default limit is not
+// reached. The timings are the solve's parts.
+TEST(Solver, FlagsTheIterationLimit) {
+  const testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(12);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const Eigen::VectorXd start = testing::Perturb(truth, 10 * kDeg, 0.05, &rng);
+  for (int limit : {1, SolverOptions().max_iterations}) {
+    SolverOptions options;
+    options.max_iterations = limit;
+    auto solver = MakeSolver(scene, std::nullopt, options);
+    solver->SetWarmStart(start);
+    const SolveResult r = solver->Solve(testing::Render(scene, truth, 0.0));
+    ASSERT_EQ(r.status, SolveStatus::kOk) << r.message;
+    EXPECT_EQ(bool(r.flags & kIterationLimit), limit == 1) << limit;
+    EXPECT_EQ(r.iterations == limit, limit == 1);
+    const SolveTimings& t = r.timings;
+    EXPECT_GT(t.linear_solver, 0.0);
+    EXPECT_GT(t.jacobian_evaluation, 0.0);
+    EXPECT_GT(t.residual_evaluation, 0.0);
+    EXPECT_GE(t.total, t.linear_solver + t.jacobian_evaluation + t.residual_evaluation);
+  }
+}
+
 TEST(Solver, DegenerateInputGivesAStatusNeverANaN) {
   const testing::Scene scene = testing::MakeScene(4);
   std::mt19937 rng(8);

@@ -74,9 +74,9 @@ struct InputCounts {
   int unknown_sources = 0;        // camera or IMU index not in the rig / IMU set, or duplicate
 };
 
-// Where the time of one solve went, milliseconds (Ceres' own accounting inside).
+// Where the time of one Levenberg-Marquardt solve went, milliseconds.
 struct SolveTimings {
-  double ceres = 0;                // ceres::Solve, all of it
+  double total = 0;                // the solve, all of it
   double linear_solver = 0;        // normal equations: J^T J and its Cholesky factorisation
   double jacobian_evaluation = 0;  // residuals and Jacobians
   double residual_evaluation = 0;  // residuals only (candidate steps)

@@ -1,11 +1,10 @@
 // The per-frame skeleton solve (slides "Overview" and "Cost function"):
 //   E(theta) = E_R + E_P + E_A + E_PP + E_PD
-// minimised by Levenberg-Marquardt (Ceres), warm-started from the previous frame.
+// minimised by Levenberg-Marquardt (src/lm_solver.h, over the skeleton's chain blocks),
+// warm-started from the previous frame.
 // The first frame (or the first after Reset) starts from InitialPose (initialisation.h).
 #ifndef MOCAP_SOLVER_H_
 #define MOCAP_SOLVER_H_
-
-#include <ceres/cost_function.h>
 
 #include <memory>
 #include <optional>
@@ -16,6 +15,7 @@
 #include "mocap/kinematics.h"
 #include "mocap/observations.h"
 #include "mocap/prior.h"
+#include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/sites.h"
 #include "mocap/skeleton.h"
 #include "mocap/slip_monitor.h"
@@ -153,7 +153,7 @@ class Solver {
   std::vector<HeadingBaseline> heading_baselines_;
   std::optional<double> last_heading_update_;
   SlipMonitor slips_;
-  std::unique_ptr<ceres::CostFunction> pca_projection_, pca_deviation_;
+  std::unique_ptr<LinearPriorResidual> pca_projection_, pca_deviation_;
   double pca_projection_weight_ = -1, pca_deviation_weight_ = -1;
 };
 

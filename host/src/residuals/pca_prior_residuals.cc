@@ -6,7 +6,7 @@
 namespace mocap {
 
 LinearPriorResidual::LinearPriorResidual(const PosePrior& prior, Eigen::MatrixXd a)
-    : mean_(prior.mean), a_(std::move(a)) {
+    : mean_(prior.mean), a_(std::move(a)), gram_(a_.transpose() * a_) {
   set_num_residuals(static_cast<int>(a_.rows()));
   mutable_parameter_block_sizes()->assign(prior.dof() / 3, 3);
 }

@@ -27,6 +27,8 @@ class LinearPriorResidual : public ceres::CostFunction {
  public:
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
+  // A^T A, the constant J^T J of the normal equations (lm_solver.h), made once.
+  const Eigen::MatrixXd& gram() const { return gram_; }
 
  protected:
   LinearPriorResidual(const PosePrior& prior, Eigen::MatrixXd a);
@@ -34,6 +36,7 @@ class LinearPriorResidual : public ceres::CostFunction {
  private:
   Eigen::VectorXd mean_;
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> a_;
+  Eigen::MatrixXd gram_;
 };
 
 class PcaProjectionResidual : public LinearPriorResidual {
