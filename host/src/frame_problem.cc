@@ -1,6 +1,7 @@
 #include "frame_problem.h"
 
 #include "mocap/residuals/acceleration_residual.h"
+#include "mocap/residuals/motion_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
@@ -85,6 +86,14 @@ void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3
   Add(kAccelerationTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
 }
 
+void FrameProblem::AddMotionTerm(const Site& site, const Eigen::Vector3d& x1,
+                                 const Eigen::Vector3d& v, double h1, double h2,
+                                 const TermOptions& options) {
+  auto* cost = new MotionResidual(&fk_, site, x1, v, h1, h2, options.weight);
+  owned_.emplace_back(cost);
+  Add(kMotionTerm, cost, options, ChainBlocks(skeleton_, site.bone, theta_));
+}
+
 void FrameProblem::AddPointTerm(const Site& site, const Eigen::Vector3d& target,
                                 const TermOptions& options) {
   auto* cost = new PointResidual(&fk_, site, target, options.weight);
@@ -104,9 +113,9 @@ void FrameProblem::Solve(const ceres::Solver::Options& options, ceres::Solver::S
 
 TermCosts FrameProblem::Costs() {
   TermCosts costs;
-  double* out[5] = {&costs.orientation, &costs.position, &costs.acceleration, &costs.pca_projection,
-                    &costs.pca_deviation};
-  for (int t = 0; t < 5; ++t) {
+  double* out[6] = {&costs.orientation,    &costs.position,      &costs.acceleration,
+                    &costs.pca_projection, &costs.pca_deviation, &costs.motion};
+  for (int t = 0; t < 6; ++t) {
     for (ceres::ResidualBlockId id : blocks_[t]) {
       double cost = 0.0;
       problem_.EvaluateResidualBlock(id, /*apply_loss_function=*/true, &cost, nullptr, nullptr);

@@ -17,8 +17,10 @@ OUTDIR/session/ (the calibrated session the take was solved with).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +29,10 @@ from mocap import _core
 from mocap.calibration import from_messages, window
 from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
+from mocap.io.session import Session
 from mocap.io.take_folder import TakeFolder, read_take
 from mocap.model.joint_centres import JOINTS, bone_indices
-from mocap.model.solver import distrust_spans
+from mocap.model.solver import distrust_spans, options_from_session, session_solver, solver_options
 from mocap.net import wire
 from mocap.recording import offline
 from mocap.takes import messages as take_messages
@@ -38,7 +41,9 @@ from mocap.takes.report import markdown
 STATUS_NAMES = {v: k.removeprefix("STATUS_").lower() for k, v in wire.PoseFrame.Status.items()}
 
 
-def solve_take(folder: Path, out: Path) -> dict:
+def solve_take(folder: Path, out: Path, settings: Sequence[str] = ()) -> dict:
+    """settings: solver options ("name=value", "term.field=value") of the solve after the
+    calibration, on top of the calibrated session's."""
     take = read_take(folder)
     if take.rig is None:
         raise InputError(f"{folder}: the take has no video; an IMU-only solve needs the IMU calibration from video")
@@ -46,6 +51,8 @@ def solve_take(folder: Path, out: Path) -> dict:
     session = take_messages.write_session(take, out / "session")
     estimated = from_messages.estimate(messages, session, window.SECONDS, str(folder), video_if_still=True)
     from_messages.write_session(out / "session", session, estimated, estimated.report)
+    if settings:
+        _set_solver(out / "session" / "session.json", settings)
     pipeline = offline.pipeline_for(session)
     thetas, statuses, left_out = _per_frame(offline.solve_messages(pipeline, messages), take)
     skeleton = pipeline.skeleton
@@ -66,6 +73,12 @@ def solve_take(folder: Path, out: Path) -> dict:
         shutil.copyfile(out / "session" / name, out / name)
     (out / "calibration.md").write_text(markdown(report))
     return report
+
+
+def _set_solver(path: Path, settings: Sequence[str]) -> None:
+    config = Session.load(path)
+    options = solver_options(list(settings), base=options_from_session(config.solver))
+    dataclasses.replace(config, solver=session_solver(options)).save(path)
 
 
 def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str], list[list[str]]]:
