@@ -87,9 +87,10 @@ TEST(OptionsJson, TheKeysAreTheFieldsWithTermsAsTermDotField) {
   const std::vector<std::string> keys = SolverOptionKeys();
   const std::set<std::string> unique(keys.begin(), keys.end());
   EXPECT_EQ(unique.size(), keys.size());
-  EXPECT_EQ(keys.size(), 5 * 4 + 19u);  // five terms of four fields, nineteen others
-  for (const char* key : {"position.loss_scale", "pca_deviation.enabled", "velocity_gain",
-                          "accel_at_rest", "max_initial_iterations"})
+  EXPECT_EQ(keys.size(), 6 * 4 + 20u);  // six terms of four fields, twenty others
+  for (const char* key :
+       {"position.loss_scale", "pca_deviation.enabled", "velocity_gain", "motion.weight",
+        "motion_velocity_gain", "accel_at_rest", "max_initial_iterations"})
     EXPECT_TRUE(unique.count(key)) << key;
   const json written = json::parse(SolverOptionsToJson(SolverOptions()));
   for (const std::string& key : keys) {

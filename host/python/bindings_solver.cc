@@ -49,7 +49,7 @@ py::dict Costs(const SolveResult& r) {
   return py::dict(py::arg("orientation") = c.orientation, py::arg("position") = c.position,
                   py::arg("acceleration") = c.acceleration,
                   py::arg("pca_projection") = c.pca_projection,
-                  py::arg("pca_deviation") = c.pca_deviation);
+                  py::arg("pca_deviation") = c.pca_deviation, py::arg("motion") = c.motion);
 }
 
 py::dict Timings(const SolveResult& r) {

@@ -1,6 +1,7 @@
 #include "frame_problem.h"
 
 #include "mocap/residuals/acceleration_residual.h"
+#include "mocap/residuals/motion_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
@@ -80,6 +81,14 @@ void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3
   Add(kAccelerationTerm, cost, options, chain_offsets_[site.bone]);
 }
 
+void FrameProblem::AddMotionTerm(const Site& site, const Eigen::Vector3d& x1,
+                                 const Eigen::Vector3d& v, double h1, double h2,
+                                 const TermOptions& options) {
+  auto* cost = new MotionResidual(&fk_, site, x1, v, h1, h2, options.weight);
+  owned_.emplace_back(cost);
+  Add(kMotionTerm, cost, options, chain_offsets_[site.bone]);
+}
+
 void FrameProblem::AddPointTerm(const Site& site, const Eigen::Vector3d& target,
                                 const TermOptions& options) {
   auto* cost = new PointResidual(&fk_, site, target, options.weight);
@@ -105,9 +114,9 @@ TermCosts FrameProblem::Costs() {
     problem_.EvaluateBlockCosts(theta_);
   }
   TermCosts costs;
-  double* out[5] = {&costs.orientation, &costs.position, &costs.acceleration, &costs.pca_projection,
-                    &costs.pca_deviation};
-  for (int t = 0; t < 5; ++t) {
+  double* out[6] = {&costs.orientation,    &costs.position,      &costs.acceleration,
+                    &costs.pca_projection, &costs.pca_deviation, &costs.motion};
+  for (int t = 0; t < 6; ++t) {
     for (int i : blocks_[t]) *out[t] += problem_.block_cost(i);
   }
   return costs;

@@ -28,7 +28,8 @@ enum Term {
   kAccelerationTerm,
   kPcaProjectionTerm,
   kPcaDeviationTerm,
-  kPointTerm  // not one of the paper's five: 3D targets (FitToPoints)
+  kMotionTerm,  // E_M: E_A's cost against a constant-velocity model (motion_residual.h)
+  kPointTerm    // not one of the paper's five: 3D targets (FitToPoints)
 };
 
 // The loss a term's options name (null for the trivial loss); the caller owns it.
@@ -48,6 +49,9 @@ class FrameProblem {
   void AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3d& x1,
                            const Eigen::Vector3d& x0, double h1, double h2,
                            const Eigen::Vector3d& measured_world, const TermOptions& options);
+  // E_M for the point `site`: x1, v its position and filtered velocity at t1 (MotionState).
+  void AddMotionTerm(const Site& site, const Eigen::Vector3d& x1, const Eigen::Vector3d& v,
+                     double h1, double h2, const TermOptions& options);
   void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
   void AddPriorTerm(Term term, const LinearPriorResidual* cost, const TermOptions& options);
@@ -70,8 +74,8 @@ class FrameProblem {
   LmProblem problem_;
   std::vector<std::vector<int>> chain_offsets_;  // per bone: its chain's blocks in theta
   std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
-  std::array<std::unique_ptr<ceres::LossFunction>, 6> losses_;
-  std::array<std::vector<int>, 6> blocks_;  // residual blocks of each term
+  std::array<std::unique_ptr<ceres::LossFunction>, 7> losses_;
+  std::array<std::vector<int>, 7> blocks_;  // residual blocks of each term
 };
 
 }  // namespace mocap

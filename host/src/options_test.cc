@@ -88,6 +88,8 @@ TEST(Options, EachFailingSolverConditionHasItsOwnMessage) {
       {"max_history_gap", [](SolverOptions* o) { o->max_history_gap = -0.1; }},
       {"velocity_gain", [](SolverOptions* o) { o->velocity_gain = 0; }},
       {"velocity_gain", [](SolverOptions* o) { o->velocity_gain = 1.5; }},
+      {"motion_velocity_gain", [](SolverOptions* o) { o->motion_velocity_gain = 0; }},
+      {"motion.weight", [](SolverOptions* o) { o->motion.weight = -1; }},
       {"max_keypoint_cost", [](SolverOptions* o) { o->max_keypoint_cost = 0; }},
       {"heading_time_constant", [](SolverOptions* o) { o->heading_time_constant = INFINITY; }},
       {"max_heading_step", [](SolverOptions* o) { o->max_heading_step = 4; }},

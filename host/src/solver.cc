@@ -90,6 +90,7 @@ std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayou
   s->headings_.assign(s->imus_.size(), 0.0);
   s->heading_baselines_.assign(s->imus_.size(), {});
   s->slips_ = SlipMonitor(s->skeleton_, s->layout_, s->imus_);
+  s->ChooseMotionPoints();
   s->Reset();
   return s;
 }
@@ -154,6 +155,7 @@ bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vecto
   heading_baselines_.assign(imus_.size(), {});
   last_heading_update_.reset();
   slips_ = SlipMonitor(skeleton_, layout_, imus_);
+  ChooseMotionPoints();
   motion_.reset();   // the sites moved: E_A starts again from the next two solves
   history_.clear();  // poses of the old skeleton: their difference is no motion
   calibration_changed_ = true;
@@ -186,6 +188,15 @@ void Solver::UpdatePriorResiduals() {
   }
 }
 
+void Solver::AddPriorTerms(FrameProblem* problem) const {
+  if (pca_projection_ && Active(options_.pca_projection)) {
+    problem->AddPriorTerm(kPcaProjectionTerm, pca_projection_.get(), options_.pca_projection);
+  }
+  if (pca_deviation_ && Active(options_.pca_deviation)) {
+    problem->AddPriorTerm(kPcaDeviationTerm, pca_deviation_.get(), options_.pca_deviation);
+  }
+}
+
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
   FrameProblem problem(skeleton_, x->data());
@@ -212,12 +223,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
                                   *motion_->accel[i], options_.acceleration);
     }
   }
-  if (pca_projection_ && Active(options_.pca_projection)) {
-    problem.AddPriorTerm(kPcaProjectionTerm, pca_projection_.get(), options_.pca_projection);
-  }
-  if (pca_deviation_ && Active(options_.pca_deviation)) {
-    problem.AddPriorTerm(kPcaDeviationTerm, pca_deviation_.get(), options_.pca_deviation);
-  }
+  if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);
+  AddPriorTerms(&problem);
   result->counts.keypoints_used = problem.count(kPositionTerm);
   result->counts.orientations_used = problem.count(kOrientationTerm);
   result->counts.accelerations_used = problem.count(kAccelerationTerm);

@@ -33,6 +33,8 @@ bool SolverOptions::IsValid(std::string* error) const {
   check.Expect(max_history_gap > 0.0, "max_history_gap", max_history_gap, "> 0 s");
   check.Expect(velocity_gain > 0.0 && velocity_gain <= 1.0, "velocity_gain", velocity_gain,
                "in (0, 1]");
+  check.Expect(motion_velocity_gain > 0.0 && motion_velocity_gain <= 1.0, "motion_velocity_gain",
+               motion_velocity_gain, "in (0, 1]");
   check.Expect(max_keypoint_cost > 0.0, "max_keypoint_cost", max_keypoint_cost, "> 0");
   check.Expect(heading_time_constant >= 0.0 && std::isfinite(heading_time_constant),
                "heading_time_constant", heading_time_constant, "finite and >= 0 s");

@@ -51,7 +51,8 @@ double MaxBoneAngleError(const Skeleton& skeleton, const Eigen::VectorXd& a,
 // Largest error of the layout's keypoint sites (metres): what the cameras observe.
 double MaxSiteError(const Scene& scene, const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 
-// Options that solve noise-free frames to the last digit (tight tolerances, 50 iterations).
+// Options that solve noise-free frames to the last digit (tight tolerances, 50 iterations,
+// no E_M: its constant-velocity model is millimetres off an accelerating motion).
 SolverOptions ExactOptions();
 
 // A solver of the scene's skeleton, rig, layout and IMUs (a test failure names what is wrong

@@ -54,9 +54,11 @@ enum QualityFlag : uint32_t {
   kLostAndReacquired = 1u << 3,        // the tracked pose had lost the keypoints: re-acquired
 };
 
-// Per-term cost E = sum of rho(|r|^2) at the solution, as on the slide.
+// Per-term cost E = sum of rho(|r|^2) at the solution, as on the slide; motion is E_M, the
+// acceleration cost of frames without E_A (residuals/motion_residual.h).
 struct TermCosts {
   double orientation = 0, position = 0, acceleration = 0, pca_projection = 0, pca_deviation = 0;
+  double motion = 0;
 };
 
 // What happened to the frame's inputs: every observation is used or counted once.

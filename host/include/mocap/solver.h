@@ -1,5 +1,6 @@
 // The per-frame skeleton solve (slides "Overview" and "Cost function"):
 //   E(theta) = E_R + E_P + E_A + E_PP + E_PD
+// and, on frames without E_A, E_M in its place (residuals/motion_residual.h),
 // minimised by Levenberg-Marquardt (src/lm_solver.h, over the skeleton's chain blocks),
 // warm-started from the previous frame.
 // The first frame (or the first after Reset) starts from InitialPose (initialisation.h).
@@ -23,7 +24,8 @@
 
 namespace mocap {
 
-struct CleanFrame;  // src/frame_validation.h
+struct CleanFrame;   // src/frame_validation.h
+class FrameProblem;  // src/frame_problem.h
 
 // Fits theta (in place, from its current value) to 3D target points of sites by least
 // squares; targets with a non-positive or non-finite weight (1/m^2) are ignored. Returns
@@ -89,10 +91,14 @@ class Solver {
   // keypoints return after frames without them (re-acquisition), the jump is the drift of
   // the dead reckoning since the last keypoints at t_fix: g = h2 / (t - t_fix) spreads it
   // over that time, so the velocity is corrected rather than the jump taken for motion.
+  // E_M's points (motion_points_) carry the same state without a measured acceleration:
+  // v_pred = v, and g = motion_velocity_gain.
   struct MotionState {
     double timestamp = 0, step = 0;  // t1, h1 (s)
     std::vector<Eigen::Vector3d> position;
     std::vector<std::optional<Eigen::Vector3d>> velocity, accel;
+    std::vector<Eigen::Vector3d> point_position;                 // of motion_points_
+    std::vector<std::optional<Eigen::Vector3d>> point_velocity;  // of motion_points_
   };
   // E_A applies at `timestamp` (the state is within max_history_gap, no re-acquisition).
   bool AccelerationUsable(double timestamp, bool reacquiring) const;
@@ -127,8 +133,16 @@ class Solver {
                     SolveResult* result);
   // The warm start of a frame at `timestamp`.
   Eigen::VectorXd WarmStart(double timestamp) const;
-  // One Levenberg-Marquardt solve of the frame from *x. False (status and message set in
-  // *result) when nothing constrains the pose or the optimiser fails.
+  // Sets motion_points_ for the skeleton.
+  void ChooseMotionPoints();
+  // E_M on each motion point with a velocity, when the frame at `timestamp` has no E_A term
+  // in *problem (the motion state is usable: AccelerationUsable).
+  void AddMotionTerms(double timestamp, FrameProblem* problem) const;
+  // E_PP and E_PD, when there is a prior and they are on.
+  void AddPriorTerms(FrameProblem* problem) const;
+  // One Levenberg-Marquardt solve of the frame from *x, with the motion terms when
+  // use_acceleration (E_A, or E_M where no IMU measures acceleration). False (status and
+  // message set in *result) when nothing constrains the pose or the optimiser fails.
   bool Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                 bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const;
 
@@ -136,6 +150,15 @@ class Solver {
   Rig rig_;
   KeypointLayout layout_;
   std::vector<ImuSite> imus_;
+  // E_M's points: every joint centre (the root's, and each bone origin apart from its parent's).
+  // Not the IMU sites: E_M is for frames without E_A, above all video-only takes, which have
+  // none. Joint centres lie on every bone of each chain, so they hold each bone's position and,
+  // through its children's, its direction; they are what the solve outputs (joints.csv,
+  // PoseFrame.joints); and each bone counts once, whatever a detector puts on it (keypoint
+  // sites would weigh the head by its face points). End bones' rotations (head, hands, toes)
+  // are the keypoints' and the prior's. The layout's keypoint sites instead were tried on the
+  // Balancing take: the same trade-off of jitter against lag, with more points.
+  std::vector<Site> motion_points_;
   std::optional<PosePrior> prior_;
   SolverOptions options_;
 

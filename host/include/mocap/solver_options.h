@@ -46,6 +46,15 @@ struct SolverOptions {
   // 0.3 were tuned on the validation clips (docs/results.md, "Tuning").
   TermOptions acceleration{true, 1.0 / (18.0 * 18.0), LossType::kCauchy, 1.0};
   TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
+  // E_M (residuals/motion_residual.h): on frames without E_A (no IMU measures acceleration),
+  // each joint centre's acceleration costs as a measured one's error does, against a
+  // constant-velocity model, at 55 m/s^2 (stronger smooths more and lags more:
+  // docs/results_real.md, the Balancing take). Video noise makes per-frame accelerations larger
+  // than the motion's own (that take: 49 m/s^2 solved, 8 in Pose2Sim's filtered 3D), so no loss
+  // tells them apart by size; Cauchy bounds what a point pulls against the keypoints, so a fast
+  // real motion (a walk's heel strike) is followed rather than lagged: trivial, a simulated walk's
+  // video-only position error was 5.6 cm instead of 3.8 (mocap eval --omit R A).
+  TermOptions motion{true, 1.0 / (55.0 * 55.0), LossType::kCauchy, 1.0};
   // One standard deviation of the prior costs as much as a keypoint at its typical error;
   // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander
   // (measured on the evaluation clips).
@@ -59,6 +68,10 @@ struct SolverOptions {
   // difference of the last two solutions, as the slide's second difference; below 1, a
   // complementary filter of that difference and the velocity integrated from the IMUs.
   double velocity_gain = 0.3;
+  // The same filter for E_M's points (Solver::MotionState), whose prediction has no measured
+  // acceleration: v <- v + motion_velocity_gain (raw - v). 0.3-1 score alike on the Balancing
+  // take; 0.6 lags least on the simulated walk.
+  double motion_velocity_gain = 0.6;
   // Mean robust cost per keypoint (rho, in the position loss's units) above which the
   // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
   // tracked pose scores ~1.1, one carried off by the motion terms 4-8
@@ -110,11 +123,13 @@ struct SolverOptions {
     visit("acceleration", &SolverOptions::acceleration);
     visit("pca_projection", &SolverOptions::pca_projection);
     visit("pca_deviation", &SolverOptions::pca_deviation);
+    visit("motion", &SolverOptions::motion);
     visit("accel_at_rest", &SolverOptions::accel_at_rest);
     visit("min_confidence", &SolverOptions::min_confidence);
     visit("max_quaternion_error", &SolverOptions::max_quaternion_error);
     visit("max_history_gap", &SolverOptions::max_history_gap);
     visit("velocity_gain", &SolverOptions::velocity_gain);
+    visit("motion_velocity_gain", &SolverOptions::motion_velocity_gain);
     visit("max_keypoint_cost", &SolverOptions::max_keypoint_cost);
     visit("predict_motion", &SolverOptions::predict_motion);
     visit("heading_time_constant", &SolverOptions::heading_time_constant);

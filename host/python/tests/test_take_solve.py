@@ -97,11 +97,12 @@ def test_the_imus_make_the_joint_centres_better_than_video_alone(simulated, vide
     fused = joint_centre_errors(*simulated[:2])
     video = joint_centre_errors(*video_only[:2])
     assert video_only[2]["imus_used"] == 0
-    # Measured (4 s, seed 3): fused 1.99 cm, video only 2.34 cm (its skeleton from the same
-    # window calibration); frame-to-frame change of the error 3.5 times smaller with the IMUs.
+    # Measured (4 s, seed 3): fused 1.99 cm, video only 2.31 cm (its skeleton from the same
+    # window calibration); frame-to-frame change of the error 1.9 times smaller with the IMUs
+    # (1.6 against 3.0 mm; the video-only solve's motion term E_M halved it from 5.7 mm).
     assert fused.mean() < 0.025 and fused.mean() < 0.9 * video.mean(), (fused.mean(), video.mean())
     jitter = lambda e: np.abs(np.diff(e, axis=0)).mean()  # noqa: E731
-    assert jitter(fused) < 0.5 * jitter(video), (jitter(fused), jitter(video))
+    assert jitter(fused) < 0.7 * jitter(video), (jitter(fused), jitter(video))
 
 
 def test_a_held_t_pose_pins_the_mountings(simulated, tmp_path):
@@ -141,11 +142,14 @@ def test_a_still_start_is_passed_over(tmp_path):
 
 @pytest.mark.skipif(not (TRIAL_CACHE / TRIAL_DONE).is_file(), reason="the real trial is not in .cache/")
 def test_pose2sims_balancing_trial_as_a_take_lands_near_its_own_3d(tmp_path):
-    folder = balancing_take.write(TRIAL_CACHE, tmp_path / "take")
-    report = take_solve.solve_take(folder, tmp_path / "out")
-    assert report["solve"]["statuses"].get("ok", 0) == 99
-    result = balancing_take.compare(TRIAL_CACHE, tmp_path / "out" / "joints.csv")
-    assert result["distance_cm"] < 4.5, result  # measured 3.6 (docs/results_real.md)
+    """`mocap eval-edge --take-solve`, with and without the motion term E_M."""
+    result = balancing_take.evaluate(TRIAL_CACHE, tmp_path / "with")
+    without = balancing_take.evaluate(TRIAL_CACHE, tmp_path / "without", ["motion.enabled=false"])
+    assert result["statuses"].get("ok", 0) == 99 and without["settings"] == ["motion.enabled=false"]
+    # Measured (docs/results_real.md): 3.69 cm, jitter 14.4 m/s^2; without E_M 3.70 cm, 49.1.
+    assert result["distance_cm"] < 4.5 and result["jitter_ours_ms2"] < 20.0, result
+    assert without["jitter_ours_ms2"] > 2.5 * result["jitter_ours_ms2"], (without, result)
+    assert result["distance_cm"] < without["distance_cm"] + 0.1, (without, result)
 
 
 def test_a_take_seen_by_one_camera_cannot_be_calibrated(simulated, tmp_path):
@@ -167,6 +171,9 @@ def test_solve_wants_exactly_one_input(tmp_path):
         out = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", *args, "--out", str(tmp_path / "o")],
                              capture_output=True, text=True)
         assert out.returncode != 0 and "exactly one" in out.stderr and "Traceback" not in out.stderr
+    out = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", "--recording", "x.mcap", "--set",
+                          "motion.enabled=false", "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert out.returncode != 0 and "--set is for --take" in out.stderr and "Traceback" not in out.stderr
     out = subprocess.run([sys.executable, "-m", "mocap.cli", "solve", "--take", str(tmp_path / "none"), "--out",
                           str(tmp_path / "o")], capture_output=True, text=True)
     assert out.returncode != 0 and "Traceback" not in out.stderr

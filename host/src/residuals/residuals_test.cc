@@ -9,6 +9,7 @@
 
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/calibration_residuals.h"
+#include "mocap/residuals/motion_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
@@ -260,6 +261,51 @@ TEST_F(ResidualsTest, AccelerationMatchesTheSecondDifference) {
   ASSERT_TRUE(uniform.Evaluate(ChainBlocks(scene_.skeleton, site.bone, theta.data()).data(),
                                r.data(), nullptr));
   EXPECT_LT((r - (xs - 2 * x1 + x0) / (dt * dt)).norm(), 1e-6);
+}
+
+// E_M: zero where the point moves on at its velocity, E_A's residual with no acceleration.
+TEST_F(ResidualsTest, MotionCostsTheSecondDifferenceAgainstConstantVelocity) {
+  const Eigen::VectorXd theta1 = testing::Perturb(truth_, 0.01, 0.005, &rng_);
+  BodyPose p1;
+  ForwardKinematics(scene_.skeleton, theta1.data(), &p1);
+  const double h1 = 1.0 / 60.0, h2 = 1.1 / 60.0, weight = 1.0 / (55.0 * 55.0);
+  std::vector<Site> sites = scene_.layout.sites;
+  for (int b = 0; b < scene_.skeleton.num_bones(); ++b) sites.push_back({b, {0, 0, 0}});
+  for (const Site& site : sites) {
+    auto at = [&](const BodyPose& p) {
+      return Eigen::Vector3d(p.position[site.bone] + p.rotation[site.bone] * site.offset);
+    };
+    const Eigen::Vector3d x1 = at(p1), v = (at(pose_) - x1) / h2;  // on course to the truth
+    MotionResidual f(fk_.get(), site, x1, v, h1, h2, weight);
+    ExpectJacobianCorrect(f, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.1, 0.05, &rng_));
+    ExpectZeroAtTruthAndGrowing(f, ChainOf(scene_.skeleton, site.bone), truth_, &rng_);
+  }
+  // Elsewhere: E_A's second difference with x(t0) = x(t1) - v h1 and no acceleration.
+  Eigen::VectorXd theta = testing::Perturb(truth_, 0.2, 0.1, &rng_);
+  for (const ImuSite& imu : scene_.imus) {
+    const Site site{imu.bone, imu.offset};
+    const Eigen::Vector3d x1 = p1.position[imu.bone] + p1.rotation[imu.bone] * imu.offset;
+    const Eigen::Vector3d v(0.4, -1.2, 0.3);
+    MotionResidual motion(fk_.get(), site, x1, v, h1, h2, weight);
+    AccelerationResidual acceleration(fk_.get(), imu, x1, x1 - v * h1, h1, h2,
+                                      Eigen::Vector3d::Zero(), weight);
+    Eigen::Vector3d rm, ra;
+    const auto blocks = ChainBlocks(scene_.skeleton, imu.bone, theta.data());
+    ASSERT_TRUE(motion.Evaluate(blocks.data(), rm.data(), nullptr));
+    ASSERT_TRUE(acceleration.Evaluate(blocks.data(), ra.data(), nullptr));
+    EXPECT_LT((rm - ra).norm(), 1e-9 * ra.norm()) << imu.name;
+  }
+  // Uniform steps: sqrt(lambda) (x - 2 x1 + x0) / dt^2 with v = (x1 - x0) / dt.
+  const Site root{0, {0, 0, 0}};
+  const Eigen::Vector3d x1(1.1, 2, 3), x0(1.3, 2, 3.1);
+  const double dt = 0.01;
+  MotionResidual uniform(fk_.get(), root, x1, (x1 - x0) / dt, dt, dt, 4.0);
+  Eigen::Vector3d r;
+  ASSERT_TRUE(
+      uniform.Evaluate(ChainBlocks(scene_.skeleton, 0, theta.data()).data(), r.data(), nullptr));
+  const Eigen::Vector3d x = theta.head<3>();  // the root's origin
+  EXPECT_LT((r - 2.0 * (x - 2 * x1 + x0) / (dt * dt)).norm(), 1e-6);
 }
 
 TEST_F(ResidualsTest, PointTermAndFitToPoints) {

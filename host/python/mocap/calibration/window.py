@@ -90,6 +90,14 @@ def solver_options(options: _core.SolverOptions | None = None) -> _core.SolverOp
     return options
 
 
+def _video_motion() -> _core.SolverOptions:
+    """Options of the calibration's own solves, which the IMUs are fitted to: no E_M (the video's
+    own motion, not a constant-velocity model's lag), so a calibration with IMUs is as without it."""
+    options = _core.SolverOptions()
+    options.motion.enabled = False
+    return options
+
+
 def solve_frames(solver: Solver, detections: np.ndarray, times: np.ndarray, readings: ImuReadings | None,
                  accelerations: bool = True) -> tuple[np.ndarray, list[str]]:
     """(F, 66) poses and statuses of frames solved in turn: detections (F, C, K, 3) of the
@@ -208,7 +216,7 @@ def _start(w: _Window, layout_name: str) -> _Start:
     estimate = skeleton_estimate.estimate(w.rig, w.detections, layout_name)
     skel = estimate.skeleton
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{layout_name}.json"), skel).scaled_to(skel)
-    thetas, _ = solve_frames(Solver(skel, w.rig, layout, []), w.detections, w.times, None)
+    thetas, _ = solve_frames(Solver(skel, w.rig, layout, [], options=_video_motion()), w.detections, w.times, None)
     sites, first = [], []
     bone_world = np.array([skel.forward_kinematics(t)[0] for t in thetas])
     for i, name in enumerate(w.readings.names if w.readings else []):
@@ -348,7 +356,7 @@ def _accelerometer_report(yaw: float, sigma: float) -> dict:
 def _window_motion(skel, rig, layout, imus: list, detections, times, readings: ImuReadings) -> np.ndarray:
     """(F, 66) the window's consecutive frames solved with a calibration, E_A off (what the
     accelerometers are compared with)."""
-    options = _core.SolverOptions()
+    options = _video_motion()
     options.acceleration.enabled = False
     thetas, _ = solve_frames(Solver(skel, rig, layout, imus, options=options), detections, times, readings,
                              accelerations=False)

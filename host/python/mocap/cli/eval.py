@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--preset", default="hq13", choices=PRESETS,
                    help="HQ: detections every frame, 8 cameras; HS: 2 of every 8 frames, 4 cameras (default hq13)")
     e.add_argument("--cameras", type=int, default=None, help="number of cameras (default: the preset's)")
-    e.add_argument("--omit", nargs="*", default=[], choices=["R", "P", "A", "PP", "PD"], help="cost terms to switch off")
+    e.add_argument("--omit", nargs="*", default=[], choices=list(simulated.TERMS), help="cost terms to switch off")
     e.add_argument("--site-offsets", default="on", choices=["on", "off"],
                    help="the detector's systematic 1-3 cm site offsets (default on)")
     e.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")

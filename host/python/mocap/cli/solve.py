@@ -24,11 +24,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     so.add_argument("--session", default=None, help="session file (default: the one attached to the recording)")
     so.add_argument("--out", required=True, help="BVH to write (--recording) or output folder (--take)")
     so.add_argument("--csv", default=None, help="also write joint positions as CSV")
+    so.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
+                    help="--take: a solver option of the solve after the calibration, e.g. motion.enabled=false "
+                    "(repeatable)")
     so.set_defaults(func=run)
 
 
 def _take(args: argparse.Namespace) -> int:
-    report = take_solve.solve_take(Path(args.take), Path(args.out))
+    report = take_solve.solve_take(Path(args.take), Path(args.out), args.set)
     print(json.dumps({"frames": report["frames"], "out": args.out, "skeleton_scales": report["skeleton"]["scales"]}),
           flush=True)
     return 0
@@ -39,6 +42,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("give exactly one of --recording FILE and --take DIR")
     if args.take:
         return _take(args)
+    if args.set:
+        raise InputError("--set is for --take (a recording is solved with its session's options)")
     with tempfile.TemporaryDirectory() as folder:
         session = Path(args.session) if args.session else reader.read_session(args.recording, folder)
         if session is None:

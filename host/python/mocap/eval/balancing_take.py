@@ -5,6 +5,7 @@ and the comparison of a solve of it with Pose2Sim's own triangulated TRC."""
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +14,7 @@ from mocap.eval import real_trial
 from mocap.io import retarget
 from mocap.io.demo_data import TRIAL
 from mocap.io.trc import read_trc
+from mocap.takes import solve as take_solve
 
 # joints.csv columns -> Pose2Sim's TRC markers (triangulated OpenPose keypoints). Our "head"
 # joint is the head bone's origin, the top of the neck: BODY_25B's UpperNeck ("Neck" in the
@@ -37,7 +39,10 @@ def write(trial: Path, folder: Path) -> Path:
 
 def compare(trial: Path, joints_csv: Path, rate: float = 60.0) -> dict:
     """Distance of the solved joint centres to Pose2Sim's markers (calibration world: the
-    TRC's Y-up axes rotated as retarget.P), and both jitters (mean |second difference| x rate^2)."""
+    TRC's Y-up axes rotated as retarget.P), and both jitters (mean |second difference| x rate^2).
+    Of the distance, per joint the part no temporal model changes, |mean offset| (bias), and
+    the mean distance after a zero-phase Gaussian (2 frames) of our joints: what smoothing
+    alone, without the causal lag, would reach."""
     trc = read_trc(trial / TRIAL)
     reference = trc.markers @ retarget.P.T
     rows = list(csv.reader(open(joints_csv)))
@@ -46,7 +51,27 @@ def compare(trial: Path, joints_csv: Path, rate: float = 60.0) -> dict:
     theirs = reference[:, [trc.names.index(m) for m in MARKERS.values()]]
     n = min(len(ours), len(theirs))
     d = np.linalg.norm(ours[:n] - theirs[:n], axis=-1)
+    bias = np.linalg.norm(np.nanmean(ours[:n] - theirs[:n], axis=0), axis=-1)
+    smoothed = np.linalg.norm(_zero_phase(ours[:n], 2.0) - theirs[:n], axis=-1)
     return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)),
             "per_joint_cm": {j: 100 * float(np.nanmean(d[:, i])) for i, j in enumerate(MARKERS)},
+            "per_joint_bias_cm": {j: 100 * float(bias[i]) for i, j in enumerate(MARKERS)},
+            "distance_zero_phase_smoothed_cm": 100 * float(np.nanmean(smoothed)),
             "jitter_ours_ms2": real_trial.jitter(ours[:n], rate),
             "jitter_pose2sim_ms2": real_trial.jitter(theirs[:n], rate)}
+
+
+def _zero_phase(x: np.ndarray, sigma: float) -> np.ndarray:
+    """x (F, ...) smoothed along its first axis by a Gaussian of `sigma` frames (ends held)."""
+    k = np.arange(-int(4 * sigma), int(4 * sigma) + 1)
+    w = np.exp(-0.5 * (k / sigma) ** 2)
+    padded = np.concatenate([np.repeat(x[:1], len(k) // 2, 0), x, np.repeat(x[-1:], len(k) // 2, 0)])
+    return sum(wi * padded[i: i + len(x)] for i, wi in enumerate(w / w.sum()))
+
+def evaluate(trial: Path, out: Path, settings: Sequence[str] = ()) -> dict:
+    """`mocap eval-edge --take-solve OUT`: the trial written as a take folder (OUT/take), solved
+    by `mocap solve --take` (OUT/solved; `settings`: solver options of the solve after the
+    calibration) and compared with Pose2Sim's TRC."""
+    report = take_solve.solve_take(write(trial, out / "take"), out / "solved", settings)
+    return {"statuses": report["solve"]["statuses"], "settings": list(settings),
+            **compare(trial, out / "solved" / "joints.csv", report["frame_rate"])}

@@ -14,6 +14,7 @@ Jitter: mean |second difference| of those points x rate^2 (m/s^2), ours and the 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,7 @@ from mocap.io import calib_toml
 from mocap.io.demo_data import TRIAL
 from mocap.io.trc import Trc, read_trc
 from mocap.model import frames, studio
-from mocap.model.solver import Solver
+from mocap.model.solver import Solver, solver_options
 from mocap.net import wire
 from mocap.sim import demo_motion
 
@@ -64,8 +65,9 @@ def trc_axes(rig: _core.Rig, trc: Trc, openpose: list[list[np.ndarray]]) -> np.n
     return best
 
 
-def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) -> dict:
-    """keypoints (C, F, 33, 3) BlazePose pixels + confidence (0 where not detected)."""
+def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]], settings: Sequence[str] = ()) -> dict:
+    """keypoints (C, F, 33, 3) BlazePose pixels + confidence (0 where not detected); settings:
+    solver options ("name=value", "term.field=value")."""
     rig = calib_toml.load(trial / "Calib_qualisys.toml")
     trc = read_trc(trial / TRIAL)
     body = demo_motion.body_model(trc.names, demo_motion.world_markers(trc))
@@ -73,7 +75,7 @@ def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) 
     layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "blazepose33.json"), skeleton).scaled_to(skeleton)
     r = trc_axes(rig, trc, openpose)
     reference = trc.markers @ r.T  # (F, M, 3) calibration world
-    solver = Solver(skeleton, rig, layout, [])
+    solver = Solver(skeleton, rig, layout, [], options=solver_options(list(settings)))
     solved = []
     for frame in host_frames(rig, layout, keypoints):
         result = solver.solve(frame.time_ns * 1e-9, list(frame.cameras), frame.keypoints, [], np.zeros((0, 4)),
@@ -84,6 +86,7 @@ def solve(trial: Path, keypoints: np.ndarray, openpose: list[list[np.ndarray]]) 
     d = np.linalg.norm(solved[:n] - reference[:n], axis=-1)  # (F, M)
     return {"frames": n, "distance_cm": 100 * float(np.nanmean(d)), "distance_median_cm": 100 * float(np.nanmedian(d)),
             "per_marker_cm": {m: 100 * float(np.nanmean(d[:, i])) for i, m in enumerate(trc.names)},
+            "per_marker_jitter_ms2": {m: jitter(solved[:n, i]) for i, m in enumerate(trc.names)},
             "jitter_ours_ms2": jitter(solved[:n]), "jitter_pose2sim_ms2": jitter(reference[:n]),
             "trc_axes": r.astype(int).tolist()}
 
@@ -109,9 +112,9 @@ def jitter(x: np.ndarray, rate: float = RATE) -> float:
     return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * rate**2)
 
 
-def evaluate(trial: Path) -> dict:
+def evaluate(trial: Path, settings: Sequence[str] = ()) -> dict:
     """`mocap eval-edge`: the edge detector's PCK and speed (mocap.eval.edge_detector)
-    and the video-only solve of its keypoints against Pose2Sim's TRC."""
+    and the video-only solve of its keypoints (with these solver settings) against Pose2Sim's TRC."""
     videos = edge_detector.load_trial(trial)
     model = edge_detector.BlazePose()
     found, speed = edge_detector.run(model, videos)
@@ -124,4 +127,4 @@ def evaluate(trial: Path) -> dict:
     openpose = [edge_detector.openpose_subjects(trial, c) for c in edge_detector.CAMERAS]
     return {"detector_tracked": edge_detector.pck(trial, found) | speed,
             "detector_naive": edge_detector.pck(trial, naive) | naive_speed,
-            "video_only_solve": solve(trial, keypoints, openpose)}
+            "video_only_solve": solve(trial, keypoints, openpose, settings)}

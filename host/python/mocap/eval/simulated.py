@@ -17,7 +17,8 @@ from mocap.model.solver import Solver, distrust_spans, solver_options
 from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
-TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation"}
+TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation",
+         "M": "motion"}
 
 
 def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOptions:

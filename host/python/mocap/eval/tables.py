@@ -21,7 +21,8 @@ from mocap.sim import take
 
 log = logging.getLogger(__name__)
 
-ABLATIONS = [("IMU (E_R, E_A)", ["R", "A"]), ("Ori. (E_R)", ["R"]), ("Acc. (E_A)", ["A"]),
+# The paper's terms: without E_A, E_M (not the paper's) would stand in for it, so it goes too.
+ABLATIONS = [("IMU (E_R, E_A)", ["R", "A", "M"]), ("Ori. (E_R)", ["R"]), ("Acc. (E_A)", ["A", "M"]),
              ("Pos. (E_P)", ["P"]), ("Prior (E_PP, E_PD)", ["PP", "PD"]), ("Prior proj. (E_PP)", ["PP"]),
              ("Prior dev. (E_PD)", ["PD"])]
 SUBSAMPLING = [(1, 1), (4, 1), (8, 2), (8, 1), (16, 2)]

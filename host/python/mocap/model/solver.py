@@ -95,11 +95,12 @@ def option_names() -> list[str]:
     return names
 
 
-def solver_options(settings: list[str]) -> _core.SolverOptions:
-    """SolverOptions with "name=value" or "term.field=value" settings applied (option_names();
-    a loss by name, a vector as comma-separated numbers). InputError names a setting that is
-    unknown, has no value or does not parse, and every field out of range."""
-    options, known = _core.SolverOptions(), option_names()
+def solver_options(settings: list[str], base: _core.SolverOptions | None = None) -> _core.SolverOptions:
+    """SolverOptions (`base`, changed in place, or the defaults) with "name=value" or
+    "term.field=value" settings applied (option_names(); a loss by name, a vector as
+    comma-separated numbers). InputError names a setting that is unknown, has no value or does
+    not parse, and every field out of range."""
+    options, known = base if base is not None else _core.SolverOptions(), option_names()
     for setting in settings:
         name, _, value = setting.partition("=")
         if name not in known or not value:

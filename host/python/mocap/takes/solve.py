@@ -20,6 +20,7 @@ import csv
 import dataclasses
 import json
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -28,9 +29,10 @@ from mocap import _core
 from mocap.calibration import from_messages, window
 from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
+from mocap.io.session import Session
 from mocap.io.take_folder import TakeFolder, read_take
 from mocap.model.joint_centres import JOINTS, bone_indices
-from mocap.model.solver import distrust_spans
+from mocap.model.solver import distrust_spans, options_from_session, session_solver, solver_options
 from mocap.net import wire
 from mocap.recording import offline
 from mocap.takes import messages as take_messages
@@ -67,15 +69,19 @@ def calibrate(folder: Path, out: Path) -> Calibrated:
     return Calibrated(take, messages, session, estimated)
 
 
-def solve_take(folder: Path, out: Path) -> dict:
-    """Solves the take folder into `out`; returns the report (calibration.json)."""
-    return solve(folder, out).report
+def solve_take(folder: Path, out: Path, settings: Sequence[str] = ()) -> dict:
+    """Solves the take folder into `out`; returns the report (calibration.json). settings:
+    solver options ("name=value", "term.field=value") of the solve after the calibration, on
+    top of the calibrated session's."""
+    return solve(folder, out, settings).report
 
 
-def solve(folder: Path, out: Path) -> SolvedTake:
+def solve(folder: Path, out: Path, settings: Sequence[str] = ()) -> SolvedTake:
     """solve_take, also giving the solved poses and the skeleton they are of."""
     calibrated = calibrate(folder, out)
     take, messages, estimated = calibrated.take, calibrated.messages, calibrated.estimated
+    if settings:
+        _set_solver(calibrated.session, settings)
     pipeline = offline.pipeline_for(calibrated.session)
     thetas, statuses, left_out = _per_frame(offline.solve_messages(pipeline, messages), take)
     skeleton = pipeline.skeleton
@@ -96,6 +102,12 @@ def solve(folder: Path, out: Path) -> SolvedTake:
         shutil.copyfile(out / "session" / name, out / name)
     (out / "calibration.md").write_text(markdown(report))
     return SolvedTake(report, skeleton, thetas)
+
+
+def _set_solver(path: Path, settings: Sequence[str]) -> None:
+    config = Session.load(path)
+    options = solver_options(list(settings), base=options_from_session(config.solver))
+    dataclasses.replace(config, solver=session_solver(options)).save(path)
 
 
 def _per_frame(poses: list, take: TakeFolder) -> tuple[np.ndarray, list[str], list[list[str]]]:
