@@ -1,6 +1,7 @@
 #include "options_json.h"
 
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <type_traits>
 
@@ -23,7 +24,12 @@ constexpr const char* kLossNames[] = {"trivial", "cauchy", "huber"};  // LossTyp
 
 // One value of a leaf field: false when j has the wrong type. Expected() names the type.
 bool ReadValue(const json& j, bool* v) { return j.is_boolean() && (*v = j.get<bool>(), true); }
-bool ReadValue(const json& j, double* v) { return j.is_number() && (*v = j.get<double>(), true); }
+// null is NaN, "unknown" (JSON has no NaN; nlohmann writes it as null): floor_height's way of
+// saying there is no floor estimate. Every other field's range check refuses NaN by name.
+bool ReadValue(const json& j, double* v) {
+  if (j.is_null()) return *v = std::numeric_limits<double>::quiet_NaN(), true;
+  return j.is_number() && (*v = j.get<double>(), true);
+}
 bool ReadValue(const json& j, int* v) {
   if (!j.is_number()) return false;
   const double d = j.get<double>();
@@ -47,13 +53,13 @@ bool ReadValue(const json& j, Eigen::Vector3d* v) {
   return true;
 }
 const char* Expected(const bool*) { return "true or false"; }
-const char* Expected(const double*) { return "a number"; }
+const char* Expected(const double*) { return "a number (or null: unknown)"; }
 const char* Expected(const int*) { return "an integer"; }
 const char* Expected(const LossType*) { return "\"trivial\", \"cauchy\" or \"huber\""; }
 const char* Expected(const Eigen::Vector3d*) { return "[x, y, z]"; }
 
 json ValueToJson(bool v) { return v; }
-json ValueToJson(double v) { return v; }
+json ValueToJson(double v) { return std::isnan(v) ? json() : json(v); }
 json ValueToJson(int v) { return v; }
 json ValueToJson(LossType v) { return kLossNames[static_cast<int>(v)]; }
 json ValueToJson(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }

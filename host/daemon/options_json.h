@@ -6,7 +6,8 @@
 //
 // "solver": every field is a key of the same name; a term (TermOptions) is an object of its
 // own fields, e.g. {"position": {"weight": 0.04}}; "loss" is "trivial", "cauchy" or "huber";
-// "accel_at_rest" is [x, y, z].
+// "accel_at_rest" is [x, y, z]; a number may be null, read as NaN (unknown): "floor_height"
+// (no floor estimate) takes it, every other field's range check refuses it.
 #ifndef MOCAP_DAEMON_OPTIONS_JSON_H_
 #define MOCAP_DAEMON_OPTIONS_JSON_H_
 

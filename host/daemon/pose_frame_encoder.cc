@@ -27,6 +27,7 @@ void SetCosts(const TermCosts& c, v1::TermCosts* costs) {
   costs->set_pca_projection(c.pca_projection);
   costs->set_pca_deviation(c.pca_deviation);
   costs->set_motion(c.motion);
+  costs->set_ground(c.ground);
 }
 
 }  // namespace

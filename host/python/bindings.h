@@ -33,7 +33,7 @@ FrameObservations MakeFrame(double timestamp, const std::vector<int>& cameras, A
                             const std::vector<int>& imus, Array quaternions, Array accelerations);
 
 void BindGeometry(py::module_& m);     // SO(3), Skeleton, fit_to_points
-void BindSites(py::module_& m);        // KeypointLayout, ImuSite and their files
+void BindSites(py::module_& m);        // KeypointLayout, ImuSite and their files, the floor
 void BindCamera(py::module_& m);       // Camera, Rig
 void BindOptions(py::module_& m);      // LossType, Term-, Solver-, Sync-, CalibrationOptions
 void BindSolver(py::module_& m);       // PosePrior, SolveResult, Solver

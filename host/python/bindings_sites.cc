@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
+#include "mocap/ground.h"
 #include "mocap/sites.h"
 
 namespace mocap::bindings {
@@ -62,11 +63,35 @@ void BindImuSites(py::module_& m) {
         "The IMU set file (mocap.imus/1) of IMU sites.");
 }
 
+// The feet's contact sites and the floor under poses (ground.h).
+void BindGround(py::module_& m) {
+  m.def(
+      "foot_contact_sites",
+      [](const Skeleton& s) {
+        std::vector<std::pair<int, Eigen::Vector3d>> out;
+        for (const Site& site : FootContactSites(s)) out.emplace_back(site.bone, site.offset);
+        return out;
+      },
+      py::arg("skeleton"),
+      "E_G's contact sites, (bone, offset m in the bone frame): heel, ball, toe tip per foot.");
+  m.def(
+      "floor_height",
+      [](const Skeleton& s, const Eigen::MatrixXd& thetas) {
+        std::vector<Eigen::VectorXd> poses;
+        for (int f = 0; f < thetas.rows(); ++f) poses.push_back(thetas.row(f).transpose());
+        return FloorHeight(s, poses);
+      },
+      py::arg("skeleton"), py::arg("thetas"),
+      "The floor under (F, pose_dim) poses (world z, m): the median of each pose's lowest foot "
+      "contact site; NaN when unknown (no feet, no finite pose, the wrong pose size).");
+}
+
 }  // namespace
 
 void BindSites(py::module_& m) {
   BindLayout(m);
   BindImuSites(m);
+  BindGround(m);
 }
 
 }  // namespace mocap::bindings

@@ -49,7 +49,8 @@ py::dict Costs(const SolveResult& r) {
   return py::dict(py::arg("orientation") = c.orientation, py::arg("position") = c.position,
                   py::arg("acceleration") = c.acceleration,
                   py::arg("pca_projection") = c.pca_projection,
-                  py::arg("pca_deviation") = c.pca_deviation, py::arg("motion") = c.motion);
+                  py::arg("pca_deviation") = c.pca_deviation, py::arg("motion") = c.motion,
+                  py::arg("ground") = c.ground);
 }
 
 py::dict Timings(const SolveResult& r) {
@@ -77,6 +78,7 @@ void BindResult(py::module_& m) {
       .def_property_readonly("position_unconstrained", flag(kPositionUnconstrained))
       .def_property_readonly("iteration_limit", flag(kIterationLimit))
       .def_property_readonly("lost_and_reacquired", flag(kLostAndReacquired))
+      .def_property_readonly("reinitialised", flag(kReinitialised))
       .def_property_readonly("costs", &Costs)
       .def_property_readonly("counts", &Counts);
 }

@@ -1,11 +1,16 @@
 #include "frame_problem.h"
 
+#include <algorithm>
+
+#include "mocap/ground.h"
 #include "mocap/residuals/acceleration_residual.h"
+#include "mocap/residuals/ground_residual.h"
 #include "mocap/residuals/motion_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
+#include "mocap/residuals/prediction_shift.h"
 #include "mocap/solver.h"
 
 namespace mocap {
@@ -22,12 +27,15 @@ ceres::LossFunction* MakeLoss(const TermOptions& t) {
   return nullptr;
 }
 
-FrameProblem::FrameProblem(const Skeleton& skeleton, double* theta)
+FrameProblem::FrameProblem(const Skeleton& skeleton, double* theta, bool shift_prediction)
     : skeleton_(skeleton),
       theta_(theta),
+      x_(Eigen::VectorXd::Zero(skeleton.pose_dim() + (shift_prediction ? 3 : 0))),
+      shift_offset_(shift_prediction ? skeleton.pose_dim() : -1),
       fk_(&skeleton),
-      problem_(skeleton.pose_dim()),
+      problem_(static_cast<int>(x_.size())),
       chain_offsets_(skeleton.num_bones()) {
+  x_.head(skeleton.pose_dim()) = Eigen::Map<const Eigen::VectorXd>(theta, skeleton.pose_dim());
   for (int b = 0; b < skeleton.num_bones(); ++b) {
     for (int j : skeleton.Chain(b)) chain_offsets_[b].push_back(BlockOffset(j));
   }
@@ -48,7 +56,7 @@ int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
                                    const std::vector<Detection>& detections,
                                    const TermOptions& options) {
   BodyPose start;
-  ForwardKinematics(skeleton_, theta_, &start);
+  ForwardKinematics(skeleton_, x_.data(), &start);
   int behind = 0;
   for (const Detection& d : detections) {
     const Site& site = layout.sites[d.keypoint];
@@ -76,17 +84,41 @@ void FrameProblem::AddAccelerationTerm(const ImuSite& site, const Eigen::Vector3
                                        const Eigen::Vector3d& x0, double h1, double h2,
                                        const Eigen::Vector3d& measured_world,
                                        const TermOptions& options) {
-  auto* cost = new AccelerationResidual(&fk_, site, x1, x0, h1, h2, measured_world, options.weight);
-  owned_.emplace_back(cost);
-  Add(kAccelerationTerm, cost, options, chain_offsets_[site.bone]);
+  auto cost = std::make_unique<AccelerationResidual>(&fk_, site, x1, x0, h1, h2, measured_world,
+                                                     options.weight);
+  const double scale = cost->position_scale();
+  AddMotion(kAccelerationTerm, std::move(cost), scale, site.bone, options);
 }
 
 void FrameProblem::AddMotionTerm(const Site& site, const Eigen::Vector3d& x1,
                                  const Eigen::Vector3d& v, double h1, double h2,
                                  const TermOptions& options) {
-  auto* cost = new MotionResidual(&fk_, site, x1, v, h1, h2, options.weight);
+  auto cost = std::make_unique<MotionResidual>(&fk_, site, x1, v, h1, h2, options.weight);
+  const double scale = cost->position_scale();
+  AddMotion(kMotionTerm, std::move(cost), scale, site.bone, options);
+}
+
+void FrameProblem::AddMotion(Term term, std::unique_ptr<ceres::CostFunction> cost,
+                             double position_scale, int bone, const TermOptions& options) {
+  std::vector<int> offsets = chain_offsets_[bone];
+  if (shift_offset_ >= 0) {
+    cost = std::make_unique<ShiftedPrediction>(std::move(cost), position_scale);
+    offsets.push_back(shift_offset_);
+    motion_information_ += position_scale * position_scale;
+  }
+  Add(term, cost.get(), options, offsets);
+  owned_.push_back(std::move(cost));
+}
+
+void FrameProblem::AddGroundTerm(const std::vector<Site>& contacts, double floor,
+                                 const TermOptions& options) {
+  BodyPose start;
+  ForwardKinematics(skeleton_, x_.data(), &start);
+  const int lowest = LowestSite(start, contacts);
+  if (lowest < 0) return;
+  auto* cost = new GroundResidual(&fk_, contacts[lowest], floor, options.weight);
   owned_.emplace_back(cost);
-  Add(kMotionTerm, cost, options, chain_offsets_[site.bone]);
+  Add(kGroundTerm, cost, options, chain_offsets_[contacts[lowest].bone]);
 }
 
 void FrameProblem::AddPointTerm(const Site& site, const Eigen::Vector3d& target,
@@ -103,20 +135,59 @@ void FrameProblem::AddPriorTerm(Term term, const LinearPriorResidual* cost,
   Add(term, cost, options, joints, &cost->gram());
 }
 
+Eigen::Matrix3d FrameProblem::RootPositionInformation() {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  std::vector<double> residuals, jacobian;
+  for (Term term : {kPositionTerm, kGroundTerm}) {
+    for (int i : blocks_[term]) {
+      const ceres::CostFunction* cost = problem_.cost_function(i);
+      const std::vector<int> offsets = problem_.offsets(i);
+      const int root = static_cast<int>(offsets.size()) - 1;  // chains end at the root
+      const int m = cost->num_residuals();
+      std::vector<const double*> parameters;
+      for (int offset : offsets) parameters.push_back(x_.data() + offset);
+      std::vector<double*> jacobians(offsets.size(), nullptr);
+      residuals.resize(m);
+      jacobian.resize(m * 6);
+      jacobians[root] = jacobian.data();
+      if (offsets[root] != 0 || !cost->Evaluate(parameters.data(), residuals.data(), jacobians.data()))
+        continue;
+      double rho[3] = {0, 1, 0};
+      const double s = Eigen::Map<const Eigen::VectorXd>(residuals.data(), m).squaredNorm();
+      if (const ceres::LossFunction* loss = problem_.loss_function(i)) loss->Evaluate(s, rho);
+      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>> j(
+          jacobian.data(), m, 6);
+      information += std::max(rho[1], 0.0) * j.leftCols<3>().transpose() * j.leftCols<3>();
+    }
+  }
+  return information;
+}
+
+void FrameProblem::AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift) {
+  if (shift_offset_ < 0) return;
+  const Eigen::Matrix3d h = RootPositionInformation();
+  Eigen::Matrix3d information = h / slack + Eigen::Matrix3d::Identity() / (max_shift * max_shift);
+  if (motion_information_ > 0.0) information += h * h / (slack * observed_ratio * motion_information_);
+  auto cost = std::make_unique<PredictionShiftPrior>(information);
+  Add(kShiftTerm, cost.get(), TermOptions{true, 1.0, LossType::kTrivial, 1.0}, {shift_offset_});
+  owned_.push_back(std::move(cost));
+}
+
 LmSummary FrameProblem::Solve(const LmOptions& options) {
-  return SolveLm(options, &problem_, theta_);
+  const LmSummary summary = SolveLm(options, &problem_, x_.data());
+  Eigen::Map<Eigen::VectorXd>(theta_, skeleton_.pose_dim()) = x_.head(skeleton_.pose_dim());
+  return summary;
 }
 
 TermCosts FrameProblem::Costs() {
-  const Eigen::Map<const Eigen::VectorXd> theta(theta_, skeleton_.pose_dim());
   // The solve leaves its solution's block costs behind; anything else is evaluated.
-  if (problem_.costs_at().size() != theta.size() || problem_.costs_at() != theta) {
-    problem_.EvaluateBlockCosts(theta_);
+  if (problem_.costs_at().size() != x_.size() || problem_.costs_at() != x_) {
+    problem_.EvaluateBlockCosts(x_.data());
   }
   TermCosts costs;
-  double* out[6] = {&costs.orientation,    &costs.position,      &costs.acceleration,
-                    &costs.pca_projection, &costs.pca_deviation, &costs.motion};
-  for (int t = 0; t < 6; ++t) {
+  double* out[7] = {&costs.orientation,   &costs.position, &costs.acceleration,
+                    &costs.pca_projection, &costs.pca_deviation, &costs.motion, &costs.ground};
+  for (int t = 0; t < 7; ++t) {
     for (int i : blocks_[t]) *out[t] += problem_.block_cost(i);
   }
   return costs;

@@ -6,6 +6,7 @@
 #include <ceres/cost_function.h>
 #include <ceres/loss_function.h>
 
+#include <Eigen/Core>
 #include <array>
 #include <memory>
 #include <vector>
@@ -29,7 +30,10 @@ enum Term {
   kPcaProjectionTerm,
   kPcaDeviationTerm,
   kMotionTerm,  // E_M: E_A's cost against a constant-velocity model (motion_residual.h)
-  kPointTerm    // not one of the paper's five: 3D targets (FitToPoints)
+  kGroundTerm,  // E_G: the lowest foot contact point on the floor (ground_residual.h)
+  kPointTerm,   // not one of the paper's five: 3D targets (FitToPoints)
+  kShiftTerm,   // the prediction shift's prior (prediction_shift.h; not in TermCosts)
+  kNumTerms
 };
 
 // The loss a term's options name (null for the trivial loss); the caller owns it.
@@ -37,8 +41,10 @@ ceres::LossFunction* MakeLoss(const TermOptions& term);
 
 class FrameProblem {
  public:
-  // theta must outlive the problem; Solve updates it in place.
-  FrameProblem(const Skeleton& skeleton, double* theta);
+  // theta must outlive the problem; Solve updates it. shift_prediction: the motion terms
+  // (E_A, E_M) get the prediction shift delta, a parameter block after theta's, whose prior
+  // AddPredictionShiftPrior adds (prediction_shift.h).
+  FrameProblem(const Skeleton& skeleton, double* theta, bool shift_prediction = false);
 
   // E_P for each detection whose site is in front of its camera at theta; returns how
   // many were behind it (and left out).
@@ -52,7 +58,16 @@ class FrameProblem {
   // E_M for the point `site`: x1, v its position and filtered velocity at t1 (MotionState).
   void AddMotionTerm(const Site& site, const Eigen::Vector3d& x1, const Eigen::Vector3d& v,
                      double h1, double h2, const TermOptions& options);
+  // E_G on the lowest of `contacts` (ground.h) at theta; none when `contacts` is empty.
+  void AddGroundTerm(const std::vector<Site>& contacts, double floor, const TermOptions& options);
   void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
+  // The prediction shift's prior (prediction_shift.h: kappa = slack, r = observed_ratio,
+  // sigma_max = max_shift), from the information of the position and ground terms added so
+  // far on the root's position at theta and the motion terms' own; none unless the problem
+  // shifts the prediction.
+  void AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift);
+  // That information: sum of rho' J^T J of those terms' residuals on the root's position.
+  Eigen::Matrix3d RootPositionInformation();
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
   void AddPriorTerm(Term term, const LinearPriorResidual* cost, const TermOptions& options);
 
@@ -67,15 +82,21 @@ class FrameProblem {
   ceres::LossFunction* Loss(Term term, const TermOptions& options);
   void Add(Term term, const ceres::CostFunction* cost, const TermOptions& options,
            const std::vector<int>& offsets, const Eigen::MatrixXd* gram = nullptr);
+  // A motion term (E_A, E_M) on `bone`, its prediction shifted when the problem does so.
+  void AddMotion(Term term, std::unique_ptr<ceres::CostFunction> cost, double position_scale,
+                 int bone, const TermOptions& options);
 
   const Skeleton& skeleton_;
-  double* theta_;
+  double* theta_;      // the caller's pose
+  Eigen::VectorXd x_;  // the parameters: the pose, then delta when the prediction shifts
+  int shift_offset_;   // delta's offset in x_, -1 without it
+  double motion_information_ = 0;  // the shifted motion terms' sum of position_scale^2
   KinematicsCache fk_;
   LmProblem problem_;
   std::vector<std::vector<int>> chain_offsets_;  // per bone: its chain's blocks in theta
   std::vector<std::unique_ptr<ceres::CostFunction>> owned_;
-  std::array<std::unique_ptr<ceres::LossFunction>, 7> losses_;
-  std::array<std::vector<int>, 7> blocks_;  // residual blocks of each term
+  std::array<std::unique_ptr<ceres::LossFunction>, kNumTerms> losses_;
+  std::array<std::vector<int>, kNumTerms> blocks_;  // residual blocks of each term
 };
 
 }  // namespace mocap

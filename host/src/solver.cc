@@ -6,6 +6,7 @@
 
 #include "frame_problem.h"
 #include "frame_validation.h"
+#include "mocap/ground.h"
 #include "mocap/initialisation.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/so3.h"
@@ -43,8 +44,12 @@ LmOptions LmOptionsOf(const SolverOptions& options, int max_iterations) {
 
 bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
 
-// Position loss scale multiplier of the coarse pass of an initialisation.
-constexpr double kCoarseLossBoost = 1e4;
+// The prediction shift (prediction_shift.h). r: a direction counts as observed where the
+// keypoints' information on the root exceeds ~1% of the motion terms' own (one camera's depth
+// has ~0.1%, its other directions ~7%, eight cameras 20-40%). sigma_max (metres): the shift's
+// scale where the keypoints see nothing, a frame of a run and more.
+constexpr double kObservedInformationRatio = 0.01;
+constexpr double kMaxPredictionShift = 0.2;
 
 // The layout's and the IMU sites' bones are the skeleton's.
 bool CheckSites(const Skeleton& skeleton, const KeypointLayout& layout,
@@ -91,6 +96,7 @@ std::unique_ptr<Solver> Solver::Create(Skeleton skeleton, Rig rig, KeypointLayou
   s->heading_baselines_.assign(s->imus_.size(), {});
   s->slips_ = SlipMonitor(s->skeleton_, s->layout_, s->imus_);
   s->ChooseMotionPoints();
+  s->contact_sites_ = FootContactSites(s->skeleton_);
   s->Reset();
   return s;
 }
@@ -156,6 +162,7 @@ bool Solver::SetCalibration(Skeleton skeleton, KeypointLayout layout, std::vecto
   last_heading_update_.reset();
   slips_ = SlipMonitor(skeleton_, layout_, imus_);
   ChooseMotionPoints();
+  contact_sites_ = FootContactSites(skeleton_);
   motion_.reset();   // the sites moved: E_A starts again from the next two solves
   history_.clear();  // poses of the old skeleton: their difference is no motion
   calibration_changed_ = true;
@@ -199,12 +206,17 @@ void Solver::AddPriorTerms(FrameProblem* problem) const {
 
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
-  FrameProblem problem(skeleton_, x->data());
+  // The motion terms' prediction may shift where the keypoints can pull it (prediction_shift.h).
+  const bool shift = use_acceleration && !frame.detections.empty() && options_.prediction_slack > 0;
+  FrameProblem problem(skeleton_, x->data(), shift);
   if (Active(options_.position)) {
     TermOptions position = options_.position;
     position.loss_scale *= position_loss_boost;
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
+  }
+  if (Active(options_.ground) && std::isfinite(options_.floor_height)) {
+    problem.AddGroundTerm(contact_sites_, options_.floor_height, options_.ground);
   }
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (slips_.distrusted(static_cast<int>(i))) {
@@ -224,6 +236,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     }
   }
   if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);
+  problem.AddPredictionShiftPrior(options_.prediction_slack, kObservedInformationRatio,
+                                  kMaxPredictionShift);
   AddPriorTerms(&problem);
   result->counts.keypoints_used = problem.count(kPositionTerm);
   result->counts.orientations_used = problem.count(kOrientationTerm);
@@ -247,48 +261,6 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   if (problem.count(kPositionTerm) == 0) result->flags |= kPositionUnconstrained;
   if (problem.count(kAccelerationTerm) == 0) result->flags |= kAccelerationUnavailable;
   result->costs = problem.Costs();
-  return true;
-}
-
-bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initialising,
-                         bool reacquiring, Eigen::VectorXd* x, SolveResult* result,
-                         Continuity* continuity) const {
-  // A new calibration moves the sensors' terms far from the warm start: the frame is solved
-  // as a first frame is, from the warm start.
-  const bool settling = initialising || calibration_changed_;
-  const int iterations = settling ? options_.max_initial_iterations : options_.max_iterations;
-  // Coarse pass: a nearly quadratic position loss pulls far-off limbs in, where the Cauchy
-  // loss would treat their large errors as outliers.
-  auto coarse_pass = [&]() {
-    SolveResult coarse = *result;
-    const bool ok = Optimise(clean, iterations, kCoarseLossBoost, false, x, &coarse);
-    if (!ok) result->message = coarse.message;
-    return ok;
-  };
-  if ((settling || reacquiring) && !coarse_pass()) {
-    result->status = SolveStatus::kFailed;
-    return false;
-  }
-  const Eigen::VectorXd warm_start = *x;
-  const SolveResult before_fine_pass = *result;
-  if (!Optimise(clean, iterations, 1.0, AccelerationUsable(timestamp, reacquiring), x, result))
-    return false;
-  // The tracked pose lost the keypoints (they sit in the loss's tail, outvoted by the motion
-  // terms): re-acquire it from the keypoints, and forget the velocities that carried it off.
-  *continuity = reacquiring ? Continuity::kReacquired : Continuity::kContinuous;
-  if (!initialising && !reacquiring && result->counts.keypoints_used > 0 &&
-      result->costs.position > options_.max_keypoint_cost * result->counts.keypoints_used) {
-    const Eigen::VectorXd tracked = *x;
-    *x = warm_start;
-    SolveResult again = before_fine_pass;
-    if (coarse_pass() && Optimise(clean, iterations, 1.0, false, x, &again)) {
-      *result = again;
-      result->flags |= kLostAndReacquired;
-      *continuity = Continuity::kRestarted;
-    } else {
-      *x = tracked;  // the re-acquisition failed: keep the tracked solution
-    }
-  }
   return true;
 }
 

@@ -73,7 +73,12 @@ std::vector<Eigen::Vector3d> Positions(const BodyPose& pose, const std::vector<S
 
 void Solver::Remember(const CleanFrame& frame, const BodyPose& pose, bool position_constrained,
                       Continuity continuity) {
-  if (history_.size() == 2) history_.erase(history_.begin());
+  // A restart's jump is no motion: the prediction starts again from this frame.
+  if (continuity == Continuity::kRestarted) {
+    history_.clear();
+  } else if (history_.size() == 2) {
+    history_.erase(history_.begin());
+  }
   history_.push_back({frame.timestamp, theta_, position_constrained});
 
   MotionState next;

@@ -27,6 +27,7 @@ bool SolverOptions::IsValid(std::string* error) const {
     }
   });
   check.Expect(accel_at_rest.allFinite(), "accel_at_rest", "finite");
+  check.Expect(!std::isinf(floor_height), "floor_height", floor_height, "finite, or NaN: unknown");
   check.Expect(min_confidence >= 0.0 && min_confidence < 1.0, "min_confidence", min_confidence,
                "in [0, 1)");
   check.Expect(max_quaternion_error > 0.0, "max_quaternion_error", max_quaternion_error, "> 0");
@@ -35,6 +36,8 @@ bool SolverOptions::IsValid(std::string* error) const {
                "in (0, 1]");
   check.Expect(motion_velocity_gain > 0.0 && motion_velocity_gain <= 1.0, "motion_velocity_gain",
                motion_velocity_gain, "in (0, 1]");
+  check.Expect(prediction_slack >= 0.0 && std::isfinite(prediction_slack), "prediction_slack",
+               prediction_slack, "finite and >= 0");
   check.Expect(max_keypoint_cost > 0.0, "max_keypoint_cost", max_keypoint_cost, "> 0");
   check.Expect(heading_time_constant >= 0.0 && std::isfinite(heading_time_constant),
                "heading_time_constant", heading_time_constant, "finite and >= 0 s");

@@ -52,13 +52,17 @@ enum QualityFlag : uint32_t {
   kIterationLimit = 1u << 1,           // stopped at the iteration limit, not by convergence
   kAccelerationUnavailable = 1u << 2,  // no acceleration history (first frames, after a gap)
   kLostAndReacquired = 1u << 3,        // the tracked pose had lost the keypoints: re-acquired
+  // The keypoints could not reach the solved pose (every one behind its camera, or still in
+  // the loss's tail after a re-acquisition): solved again from this frame's own initial pose.
+  kReinitialised = 1u << 4,
 };
 
 // Per-term cost E = sum of rho(|r|^2) at the solution, as on the slide; motion is E_M, the
-// acceleration cost of frames without E_A (residuals/motion_residual.h).
+// acceleration cost of frames without E_A (residuals/motion_residual.h), ground E_G, the lowest
+// foot contact point's height above the floor (residuals/ground_residual.h).
 struct TermCosts {
   double orientation = 0, position = 0, acceleration = 0, pca_projection = 0, pca_deviation = 0;
-  double motion = 0;
+  double motion = 0, ground = 0;
 };
 
 // What happened to the frame's inputs: every observation is used or counted once.

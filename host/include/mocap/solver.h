@@ -123,10 +123,24 @@ class Solver {
   // Turns each IMU's world orientation and acceleration by its heading correction.
   void TurnByHeadings(CleanFrame* frame) const;
   // The optimisation of a frame from *x: a coarse pass first when (re)initialising, the fine
-  // pass, then a re-acquisition when the tracked pose lost the keypoints (max_keypoint_cost).
-  // False, with the status and message in *result, when a pass fails.
+  // pass, then a re-acquisition when the tracked pose lost the keypoints (max_keypoint_cost),
+  // and a re-initialisation when they still cannot reach it (solver_passes.cc). False, with
+  // the status and message in *result, when a pass fails.
   bool SolvePasses(const CleanFrame& frame, double timestamp, bool initialising, bool reacquiring,
                    Eigen::VectorXd* x, SolveResult* result, Continuity* continuity) const;
+  // The coarse pass from *x (a nearly quadratic position loss, no motion terms); false, with
+  // the message in *result, when it fails.
+  bool CoarsePass(const CleanFrame& frame, int iterations, Eigen::VectorXd* x,
+                  SolveResult* result) const;
+  // A recovery: the frame solved from `start` (coarse and fine pass, no motion terms; `before`
+  // the result before the fine pass), taken with `flag` and continuity kRestarted when it at
+  // least halves the mean keypoint cost of *result; else nothing changes.
+  void Recover(const CleanFrame& frame, const Eigen::VectorXd& start, int iterations,
+               const SolveResult& before, QualityFlag flag, Eigen::VectorXd* x,
+               SolveResult* result, Continuity* continuity) const;
+  // The keypoints of a solution sit in the loss's tail: their mean cost is over
+  // max_keypoint_cost.
+  bool InLossTail(const SolveResult& result) const;
   // After a solve (pose its solution): the sensors it left out into *result, and, when it
   // tracked the keypoints, what they say of each sensor (slip_monitor.h).
   void WatchSensors(const CleanFrame& frame, const BodyPose& pose, bool tracked,
@@ -159,6 +173,7 @@ class Solver {
   // are the keypoints' and the prior's. The layout's keypoint sites instead were tried on the
   // Balancing take: the same trade-off of jitter against lag, with more points.
   std::vector<Site> motion_points_;
+  std::vector<Site> contact_sites_;  // E_G's candidates: the feet's (ground.h)
   std::optional<PosePrior> prior_;
   SolverOptions options_;
 

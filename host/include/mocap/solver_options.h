@@ -9,6 +9,7 @@
 #define MOCAP_SOLVER_OPTIONS_H_
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 
 namespace mocap {
@@ -59,6 +60,15 @@ struct SolverOptions {
   // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander
   // (measured on the evaluation clips).
   TermOptions pca_deviation{true, 1.0, LossType::kTrivial, 1.0};
+  // E_G (residuals/ground_residual.h): the lowest foot contact point on the floor, on frames
+  // whose floor_height is known. SIGMA_G below: the height a stance foot's lowest contact site
+  // varies by on the clips' walks (the sites are an idealised sole); Cauchy, so a jump's or a
+  // run's flight phase, decimetres up, costs and pulls little (GROUND_RATIONALE).
+  TermOptions ground{true, 1.0 / (0.02 * 0.02), LossType::kCauchy, 1.0};  // 2 cm
+  // The floor's height (world z, metres), as FloorHeight (ground.h) defines it from poses: the
+  // median of each pose's lowest foot contact site, so a sole's thickness is part of it. NaN:
+  // unknown, and E_G is off (a session without a floor estimate solves as before E_G existed).
+  double floor_height = std::numeric_limits<double>::quiet_NaN();
 
   Eigen::Vector3d accel_at_rest{0, 0, 9.80665};  // a_g: stationary accelerometer, world, m/s^2
   double min_confidence = 0.05;                  // detections at or below are "not detected"
@@ -72,6 +82,13 @@ struct SolverOptions {
   // acceleration: v <- v + motion_velocity_gain (raw - v). 0.3-1 score alike on the Balancing
   // take; 0.6 lags least on the simulated walk.
   double motion_velocity_gain = 0.6;
+  // The motion terms' prediction (E_A's, E_M's) may shift by about sqrt(prediction_slack)
+  // times the frame's own uncertainty of the root's position from its keypoints and ground
+  // contact (residuals/prediction_shift.h): along a direction the keypoints barely observe
+  // (one camera's depth) the root then follows them by slack / (1 + slack) of their pull per
+  // frame instead of dead-reckoning away; where they observe it (two cameras or more)
+  // nothing changes. 0: the prediction is exact (the paper's).
+  double prediction_slack = 1.0;
   // Mean robust cost per keypoint (rho, in the position loss's units) above which the
   // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
   // tracked pose scores ~1.1, one carried off by the motion terms 4-8
@@ -124,12 +141,15 @@ struct SolverOptions {
     visit("pca_projection", &SolverOptions::pca_projection);
     visit("pca_deviation", &SolverOptions::pca_deviation);
     visit("motion", &SolverOptions::motion);
+    visit("ground", &SolverOptions::ground);
+    visit("floor_height", &SolverOptions::floor_height);
     visit("accel_at_rest", &SolverOptions::accel_at_rest);
     visit("min_confidence", &SolverOptions::min_confidence);
     visit("max_quaternion_error", &SolverOptions::max_quaternion_error);
     visit("max_history_gap", &SolverOptions::max_history_gap);
     visit("velocity_gain", &SolverOptions::velocity_gain);
     visit("motion_velocity_gain", &SolverOptions::motion_velocity_gain);
+    visit("prediction_slack", &SolverOptions::prediction_slack);
     visit("max_keypoint_cost", &SolverOptions::max_keypoint_cost);
     visit("predict_motion", &SolverOptions::predict_motion);
     visit("heading_time_constant", &SolverOptions::heading_time_constant);

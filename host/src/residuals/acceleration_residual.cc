@@ -28,8 +28,7 @@ bool AccelerationResidual::Evaluate(double const* const* parameters, double* res
   Eigen::Map<Eigen::Vector3d> r(residuals);
   r = sqrt_weight_ * (solved - measured_world_);
   if (jacobians != nullptr) {
-    const double s = sqrt_weight_ * 2.0 / (h2_ * (h1_ + h2_));
-    const Eigen::Matrix3d m = s * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d m = position_scale() * Eigen::Matrix3d::Identity();
     PointJacobian<3>(fk_->skeleton(), pose, site_.bone, x, m, jacobians);
   }
   return true;

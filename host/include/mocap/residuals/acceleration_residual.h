@@ -31,6 +31,8 @@ class AccelerationResidual : public ceres::CostFunction {
                        const Eigen::Vector3d& measured_world, double weight);
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
+  // dr/dx: how the residual moves with the site's position (a scalar times the identity).
+  double position_scale() const { return sqrt_weight_ * 2.0 / (h2_ * (h1_ + h2_)); }
 
  private:
   KinematicsCache* fk_;

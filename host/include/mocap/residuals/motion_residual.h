@@ -36,6 +36,8 @@ class MotionResidual : public ceres::CostFunction {
                  const Eigen::Vector3d& v, double h1, double h2, double weight);
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
+  // dr/dx: how the residual moves with the point's position (a scalar times the identity).
+  double position_scale() const { return scale_; }
 
  private:
   KinematicsCache* fk_;

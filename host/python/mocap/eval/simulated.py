@@ -86,6 +86,8 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
         options = options_for(omit, settings)
         if estimated and not any(s.startswith("heading_time_constant=") for s in settings):
             options = window.solver_options(options)
+        if not any(s.startswith("floor_height=") for s in settings):  # E_G's floor: the truth's (oracle)
+            options.floor_height = estimated.floor_height if estimated else _core.floor_height(t.skeleton, t.thetas)
         left_out: list[list[str]] = []
         solved, ms = solve(t, options, estimated, distrusted=left_out)
     result = errors(t.skeleton, t.thetas, solved, 1.0 / config.rate, estimated.skeleton if estimated else None)
