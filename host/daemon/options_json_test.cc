@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -16,7 +17,7 @@ using nlohmann::json;
 // A value of each field's type that differs from the default and stays in range.
 void Change(bool* v) { *v = !*v; }
 void Change(int* v) { *v += 3; }
-void Change(double* v) { *v = *v * 0.5 + 0.01; }
+void Change(double* v) { *v = std::isnan(*v) ? 0.05 : *v * 0.5 + 0.01; }  // NaN: unknown
 void Change(LossType* v) { *v = *v == LossType::kHuber ? LossType::kCauchy : LossType::kHuber; }
 void Change(Eigen::Vector3d* v) { *v += Eigen::Vector3d(0.1, -0.2, 0.3); }
 void Change(TermOptions* t) {
@@ -63,6 +64,17 @@ TEST(OptionsJson, KeysLeftOutKeepTheirValues) {
   EXPECT_EQ(o.max_keypoint_cost, SolverOptions().max_keypoint_cost);
 }
 
+// The floor's height unknown (NaN, the default) is null in JSON, which has no NaN.
+TEST(OptionsJson, AnUnknownFloorIsNull) {
+  EXPECT_TRUE(json::parse(SolverOptionsToJson(SolverOptions()))["floor_height"].is_null());
+  SolverOptions o;
+  std::string error;
+  ASSERT_TRUE(ParseSolverOptionsJson(R"({"floor_height": 0.04})", &o, &error)) << error;
+  EXPECT_EQ(o.floor_height, 0.04);
+  ASSERT_TRUE(ParseSolverOptionsJson(R"({"floor_height": null})", &o, &error)) << error;
+  EXPECT_TRUE(std::isnan(o.floor_height));
+}
+
 TEST(OptionsJson, AnUnknownKeyOrAWrongValueIsRefusedByName) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {R"({"velocity_gian": 0.5})", "unknown key 'velocity_gian'"},
@@ -73,6 +85,8 @@ TEST(OptionsJson, AnUnknownKeyOrAWrongValueIsRefusedByName) {
       {R"({"accel_at_rest": [0, 9.8]})", "'accel_at_rest' must be [x, y, z]"},
       {R"({"orientation": 3})", "'orientation' must be an object"},
       {R"({"velocity_gain": 0})", "velocity_gain = 0 is out of range"},
+      {R"({"velocity_gain": null})", "velocity_gain = nan is out of range"},
+      {R"({"floor_height": "low"})", "'floor_height' must be a number (or null: unknown)"},
       {R"([1])", "must be an object"},
   };
   for (const auto& [text, message] : cases) {
@@ -87,10 +101,10 @@ TEST(OptionsJson, TheKeysAreTheFieldsWithTermsAsTermDotField) {
   const std::vector<std::string> keys = SolverOptionKeys();
   const std::set<std::string> unique(keys.begin(), keys.end());
   EXPECT_EQ(unique.size(), keys.size());
-  EXPECT_EQ(keys.size(), 6 * 4 + 20u);  // six terms of four fields, twenty others
-  for (const char* key :
-       {"position.loss_scale", "pca_deviation.enabled", "velocity_gain", "motion.weight",
-        "motion_velocity_gain", "accel_at_rest", "max_initial_iterations"})
+  EXPECT_EQ(keys.size(), 7 * 4 + 22u);  // seven terms of four fields, twenty-two others
+  for (const char* key : {"position.loss_scale", "pca_deviation.enabled", "velocity_gain",
+                          "motion.weight", "motion_velocity_gain", "ground.weight", "floor_height",
+                          "prediction_slack", "accel_at_rest", "max_initial_iterations"})
     EXPECT_TRUE(unique.count(key)) << key;
   const json written = json::parse(SolverOptionsToJson(SolverOptions()));
   for (const std::string& key : keys) {

@@ -9,11 +9,13 @@
 
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/calibration_residuals.h"
+#include "mocap/residuals/ground_residual.h"
 #include "mocap/residuals/motion_residual.h"
 #include "mocap/residuals/orientation_residual.h"
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
+#include "mocap/ground.h"
 #include "mocap/so3.h"
 #include "mocap/solver.h"
 #include "synthetic_scene.h"
@@ -306,6 +308,33 @@ TEST_F(ResidualsTest, MotionCostsTheSecondDifferenceAgainstConstantVelocity) {
       uniform.Evaluate(ChainBlocks(scene_.skeleton, 0, theta.data()).data(), r.data(), nullptr));
   const Eigen::Vector3d x = theta.head<3>();  // the root's origin
   EXPECT_LT((r - 2.0 * (x - 2 * x1 + x0) / (dt * dt)).norm(), 1e-6);
+}
+
+// E_G: sqrt(lambda) times the contact site's height above the floor, zero on it.
+TEST_F(ResidualsTest, GroundCostsTheContactSiteHeightAboveTheFloor) {
+  const std::vector<Site> contacts = FootContactSites(scene_.skeleton);
+  ASSERT_EQ(contacts.size(), 6u);
+  const double weight = 1.0 / (0.02 * 0.02);
+  for (const Site& site : contacts) {
+    const double z = (pose_.position[site.bone] + pose_.rotation[site.bone] * site.offset).z();
+    GroundResidual on_floor(fk_.get(), site, z, weight);
+    ExpectJacobianCorrect(on_floor, ChainOf(scene_.skeleton, site.bone),
+                          testing::Perturb(truth_, 0.2, 0.1, &rng_));
+    double r = 1.0;
+    ASSERT_TRUE(on_floor.Evaluate(ChainBlocks(scene_.skeleton, site.bone, truth_.data()).data(),
+                                  &r, nullptr));
+    EXPECT_LT(std::abs(r), 1e-12);
+    // 3 cm above a floor at z - 0.03: 1.5 sigma; the root raised 10 cm adds 5 sigma.
+    GroundResidual below(fk_.get(), site, z - 0.03, weight);
+    Eigen::VectorXd raised = truth_;
+    raised[2] += 0.1;
+    for (const auto& [theta, expected] : {std::pair{truth_, 1.5}, std::pair{raised, 6.5}}) {
+      Eigen::VectorXd t = theta;
+      ASSERT_TRUE(
+          below.Evaluate(ChainBlocks(scene_.skeleton, site.bone, t.data()).data(), &r, nullptr));
+      EXPECT_NEAR(r, expected, 1e-9);
+    }
+  }
 }
 
 TEST_F(ResidualsTest, PointTermAndFitToPoints) {

@@ -151,4 +151,7 @@ def write_session(out: Path, session: Path, estimated: Estimated, report: dict) 
     calibrated = dataclasses.replace(config, skeleton="skeleton.json", imus="imus.json", layout="layout.json",
                                      imus_calibrated=True, base=out, **copied)
     calibrated = calibrated.with_solver(heading_time_constant=window.HEADING_TIME_CONSTANT_S, heading_baseline_s=0.0)
+    floor = estimated.report.get("window", {}).get("floor_height_m")  # E_G's floor, when the window saw one
+    if floor is not None:
+        calibrated = calibrated.with_solver(floor_height=floor)
     calibrated.save(out / "session.json")

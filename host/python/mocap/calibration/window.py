@@ -81,6 +81,7 @@ class Calibration:
     window_frames: np.ndarray  # (W,) the frames of the joint solve
     window_thetas: np.ndarray  # (W, 66) their poses, with the estimated skeleton
     site_directions: np.ndarray  # (3 x keypoints, kept): the sites' directions step 4b observed
+    floor_height: float = float("nan")  # m, world z: the floor under the window's poses (E_G's; NaN: unknown)
 
 
 def solver_options(options: _core.SolverOptions | None = None) -> _core.SolverOptions:
@@ -91,8 +92,7 @@ def solver_options(options: _core.SolverOptions | None = None) -> _core.SolverOp
 
 
 def _video_motion() -> _core.SolverOptions:
-    """Options of the calibration's own solves, which the IMUs are fitted to: no E_M (the video's
-    own motion, not a constant-velocity model's lag), so a calibration with IMUs is as without it."""
+    """The calibration's own solves, which the IMUs are fitted to: no E_M (the video's motion, not a model's lag)."""
     options = _core.SolverOptions()
     options.motion.enabled = False
     return options
@@ -186,8 +186,10 @@ def estimate(rig: _core.Rig, data: CalibrationInput, seconds: float = SECONDS, s
     imus = [s for s in solved.result.imus if s.name not in solved.left_out]
     report["imu_positions"] = _place_imus(solved.result.skeleton, rig, solved.layout, imus, w.detections, w.times,
                                           readings, dense)
+    floor = _core.floor_height(solved.result.skeleton, np.array(solved.thetas))  # ground.h's definition
+    report["floor_height_m"] = floor if np.isfinite(floor) else None
     return Calibration(solved.result.skeleton, solved.layout, imus, start.estimate, report, np.array(used),
-                       np.array(solved.thetas), solved.directions)
+                       np.array(solved.thetas), solved.directions, floor)
 
 
 @dataclasses.dataclass

@@ -86,7 +86,7 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
         options = options_for(omit, settings)
         if estimated and not any(s.startswith("heading_time_constant=") for s in settings):
             options = window.solver_options(options)
-        if not any(s.startswith("floor_height=") for s in settings):  # E_G's floor: the truth's (oracle)
+        if not any(s.startswith("floor_height=") for s in settings):  # E_G's floor: the window's, or the truth's
             options.floor_height = estimated.floor_height if estimated else _core.floor_height(t.skeleton, t.thetas)
         left_out: list[list[str]] = []
         solved, ms = solve(t, options, estimated, distrusted=left_out)
