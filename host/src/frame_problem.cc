@@ -57,14 +57,23 @@ int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
                                    const TermOptions& options) {
   BodyPose start;
   ForwardKinematics(skeleton_, x_.data(), &start);
+  const ceres::LossFunction* loss = Loss(kPositionTerm, options);
   int behind = 0;
   for (const Detection& d : detections) {
     const Site& site = layout.sites[d.keypoint];
     const Camera& cam = rig.cameras[d.camera];
     Eigen::Vector2d pixel;
-    if (!cam.Project(start.position[site.bone] + start.rotation[site.bone] * site.offset, &pixel)) {
+    Eigen::Matrix<double, 2, 3> d_pixel;
+    if (!cam.Project(start.position[site.bone] + start.rotation[site.bone] * site.offset, &pixel,
+                     shift_offset_ >= 0 ? &d_pixel : nullptr)) {
       ++behind;
       continue;
+    }
+    if (shift_offset_ >= 0) {  // the keypoint's information on the root (its position's)
+      const double w = options.weight * d.confidence;
+      double rho[3] = {0, 1, 0};
+      if (loss != nullptr) loss->Evaluate(w * (pixel - d.pixel).squaredNorm(), rho);
+      root_information_ += std::max(rho[1], 0.0) * w * d_pixel.transpose() * d_pixel;
     }
     auto* cost = new PositionResidual(&fk_, &cam, site, d.pixel, d.confidence, options.weight);
     owned_.emplace_back(cost);
@@ -116,6 +125,14 @@ void FrameProblem::AddGroundTerm(const std::vector<Site>& contacts, double floor
   ForwardKinematics(skeleton_, x_.data(), &start);
   const int lowest = LowestSite(start, contacts);
   if (lowest < 0) return;
+  if (shift_offset_ >= 0) {
+    const Site& c = contacts[lowest];
+    const double height = (start.position[c.bone] + start.rotation[c.bone] * c.offset).z() - floor;
+    double rho[3] = {0, 1, 0};
+    if (const ceres::LossFunction* loss = Loss(kGroundTerm, options))
+      loss->Evaluate(options.weight * height * height, rho);
+    root_information_(2, 2) += std::max(rho[1], 0.0) * options.weight;
+  }
   auto* cost = new GroundResidual(&fk_, contacts[lowest], floor, options.weight);
   owned_.emplace_back(cost);
   Add(kGroundTerm, cost, options, chain_offsets_[contacts[lowest].bone]);
@@ -135,37 +152,9 @@ void FrameProblem::AddPriorTerm(Term term, const LinearPriorResidual* cost,
   Add(term, cost, options, joints, &cost->gram());
 }
 
-Eigen::Matrix3d FrameProblem::RootPositionInformation() {
-  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-  std::vector<double> residuals, jacobian;
-  for (Term term : {kPositionTerm, kGroundTerm}) {
-    for (int i : blocks_[term]) {
-      const ceres::CostFunction* cost = problem_.cost_function(i);
-      const std::vector<int> offsets = problem_.offsets(i);
-      const int root = static_cast<int>(offsets.size()) - 1;  // chains end at the root
-      const int m = cost->num_residuals();
-      std::vector<const double*> parameters;
-      for (int offset : offsets) parameters.push_back(x_.data() + offset);
-      std::vector<double*> jacobians(offsets.size(), nullptr);
-      residuals.resize(m);
-      jacobian.resize(m * 6);
-      jacobians[root] = jacobian.data();
-      if (offsets[root] != 0 || !cost->Evaluate(parameters.data(), residuals.data(), jacobians.data()))
-        continue;
-      double rho[3] = {0, 1, 0};
-      const double s = Eigen::Map<const Eigen::VectorXd>(residuals.data(), m).squaredNorm();
-      if (const ceres::LossFunction* loss = problem_.loss_function(i)) loss->Evaluate(s, rho);
-      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>> j(
-          jacobian.data(), m, 6);
-      information += std::max(rho[1], 0.0) * j.leftCols<3>().transpose() * j.leftCols<3>();
-    }
-  }
-  return information;
-}
-
 void FrameProblem::AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift) {
   if (shift_offset_ < 0) return;
-  const Eigen::Matrix3d h = RootPositionInformation();
+  const Eigen::Matrix3d& h = root_information_;
   Eigen::Matrix3d information = h / slack + Eigen::Matrix3d::Identity() / (max_shift * max_shift);
   if (motion_information_ > 0.0) information += h * h / (slack * observed_ratio * motion_information_);
   auto cost = std::make_unique<PredictionShiftPrior>(information);

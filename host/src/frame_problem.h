@@ -63,11 +63,13 @@ class FrameProblem {
   void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
   // The prediction shift's prior (prediction_shift.h: kappa = slack, r = observed_ratio,
   // sigma_max = max_shift), from the information of the position and ground terms added so
-  // far on the root's position at theta and the motion terms' own; none unless the problem
-  // shifts the prediction.
+  // far on the root's position at theta (root_information()) and the motion terms' own; none
+  // unless the problem shifts the prediction.
   void AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift);
-  // That information: sum of rho' J^T J of those terms' residuals on the root's position.
-  Eigen::Matrix3d RootPositionInformation();
+  // The position and ground terms' information on the root's position at theta, sum of
+  // rho' J^T J of their residuals on it: gathered as they are added when the prediction shifts
+  // (the keypoints' from the projection Jacobians their behind-the-camera check computes).
+  const Eigen::Matrix3d& root_information() const { return root_information_; }
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
   void AddPriorTerm(Term term, const LinearPriorResidual* cost, const TermOptions& options);
 
@@ -91,6 +93,7 @@ class FrameProblem {
   Eigen::VectorXd x_;  // the parameters: the pose, then delta when the prediction shifts
   int shift_offset_;   // delta's offset in x_, -1 without it
   double motion_information_ = 0;  // the shifted motion terms' sum of position_scale^2
+  Eigen::Matrix3d root_information_ = Eigen::Matrix3d::Zero();
   KinematicsCache fk_;
   LmProblem problem_;
   std::vector<std::vector<int>> chain_offsets_;  // per bone: its chain's blocks in theta

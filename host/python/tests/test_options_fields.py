@@ -36,7 +36,7 @@ def test_the_session_reader_and_the_wrapper_take_every_option_the_bindings_expor
     exported = _flattened(_core.SolverOptions, _core.SolverOptions())
     assert exported == set(_core.session_solver_keys()), "the session reader"
     assert exported == set(wrapper.option_names()), "the Python wrapper (mocap.model.solver)"
-    assert len(exported) == 44  # 6 terms x 4 fields + 20 others: update when a field is added
+    assert len(exported) == 50  # 7 terms x 4 fields + 22 others: update when a field is added
 
 
 def _changed(value):
@@ -47,6 +47,8 @@ def _changed(value):
         return "huber" if value != _core.LossType.HUBER else "cauchy"
     if isinstance(value, np.ndarray):
         return ",".join(str(v + 0.5) for v in value)
+    if isinstance(value, float) and np.isnan(value):  # unknown (floor_height): a known value
+        return "0.05"
     return str(value + 1) if isinstance(value, int) else str(value * 0.5 + 0.01)
 
 

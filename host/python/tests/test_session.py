@@ -35,6 +35,8 @@ def _changed(value):
     """A valid value other than an option's default (mocapd's IsValid accepts each)."""
     if isinstance(value, bool):
         return not value
+    if value is None:  # unknown (floor_height: null, NaN in the solver): a known value
+        return 0.05
     if isinstance(value, int):
         return value + 1
     if isinstance(value, float):
@@ -121,6 +123,11 @@ def test_the_calibration_writes_a_session_mocapd_reads(session, tmp_path):
         ("skeleton.json", "imus.json", "layout.json", "rig.json")
     assert calibrated.imus_calibrated and calibrated.solver_options().heading_time_constant > 0
     assert calibrated.inputs == session.inputs and calibrated.file("prior").is_file()
+    assert np.isnan(calibrated.solver_options().floor_height)  # the window saw no floor: E_G off
+    # A floor the window found (calibration.window's report) is the calibrated session's.
+    estimated.report["window"] = {"floor_height_m": 0.043}
+    write_session(tmp_path / "floor", source, estimated, estimated.report)
+    assert Session.load(tmp_path / "floor" / "session.json").solver_options().floor_height == 0.043
 
 
 def test_a_recording_carries_its_session(session, tmp_path):
