@@ -156,7 +156,8 @@ void FrameProblem::AddPredictionShiftPrior(double slack, double observed_ratio, 
   if (shift_offset_ < 0) return;
   const Eigen::Matrix3d& h = root_information_;
   Eigen::Matrix3d information = h / slack + Eigen::Matrix3d::Identity() / (max_shift * max_shift);
-  if (motion_information_ > 0.0) information += h * h / (slack * observed_ratio * motion_information_);
+  if (motion_information_ > 0.0)
+    information += h * h / (slack * observed_ratio * motion_information_);
   auto cost = std::make_unique<PredictionShiftPrior>(information);
   Add(kShiftTerm, cost.get(), TermOptions{true, 1.0, LossType::kTrivial, 1.0}, {shift_offset_});
   owned_.push_back(std::move(cost));
@@ -174,8 +175,9 @@ TermCosts FrameProblem::Costs() {
     problem_.EvaluateBlockCosts(x_.data());
   }
   TermCosts costs;
-  double* out[7] = {&costs.orientation,   &costs.position, &costs.acceleration,
-                    &costs.pca_projection, &costs.pca_deviation, &costs.motion, &costs.ground};
+  double* out[7] = {&costs.orientation,    &costs.position,      &costs.acceleration,
+                    &costs.pca_projection, &costs.pca_deviation, &costs.motion,
+                    &costs.ground};
   for (int t = 0; t < 7; ++t) {
     for (int i : blocks_[t]) *out[t] += problem_.block_cost(i);
   }

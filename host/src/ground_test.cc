@@ -62,7 +62,7 @@ TEST(Ground, TheFloorIsWhereTheLowestContactUsuallyIsAJumpAside) {
     ForwardKinematics(skeleton, theta.data(), &pose);
     double z = 1e9;
     for (const Site& s : sites) z = std::min(z, World(pose, s).z());
-    theta[2] += 0.02 - z;  // the lowest site 2 cm above z = 0 ...
+    theta[2] += 0.02 - z;                        // the lowest site 2 cm above z = 0 ...
     if (f % 3 == 0) theta[2] += 0.3 + 0.01 * f;  // ... but in a third of them, in the air
     poses.push_back(theta);
   }

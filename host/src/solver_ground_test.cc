@@ -31,9 +31,10 @@ PoseAt Walking(const Skeleton& skeleton, std::mt19937* rng) {
   BodyPose pose;
   ForwardKinematics(skeleton, rest.data(), &pose);
   const std::vector<Site> feet = FootContactSites(skeleton);
-  rest[2] -= (pose.position[feet[LowestSite(pose, feet)].bone] +
-              pose.rotation[feet[LowestSite(pose, feet)].bone] * feet[LowestSite(pose, feet)].offset)
-                 .z();
+  rest[2] -=
+      (pose.position[feet[LowestSite(pose, feet)].bone] +
+       pose.rotation[feet[LowestSite(pose, feet)].bone] * feet[LowestSite(pose, feet)].offset)
+          .z();
   return [rest, swing](double t) -> Eigen::VectorXd {
     Eigen::VectorXd theta = rest + std::sin(5.0 * t) * swing;
     theta[0] += 1.0 * t - 1.0;
@@ -56,8 +57,8 @@ struct Track {
 // noise) and its 13 IMUs (accelerations of the true motion); before frame f, edit(f, solver,
 // observations) may change either.
 Track Solve(const testing::Scene& scene, const PoseAt& pose_at, int frames, double pixel_noise,
-          const SolverOptions& options,
-          const std::function<void(int, Solver*, FrameObservations*)>& edit = {}) {
+            const SolverOptions& options,
+            const std::function<void(int, Solver*, FrameObservations*)>& edit = {}) {
   std::mt19937 rng(11);
   std::vector<Eigen::VectorXd> samples;
   for (int f = 0; f < frames; f += 20) samples.push_back(pose_at(f / kRate));
@@ -71,7 +72,8 @@ Track Solve(const testing::Scene& scene, const PoseAt& pose_at, int frames, doub
     testing::SetAccelerations(scene, pose_at(t - dt), t - dt, pose_at(t), t, pose_at(t + dt),
                               t + dt, options.accel_at_rest, &obs);
     for (CameraObservation& c : obs.cameras) {
-      for (Keypoint2D& k : c.keypoints) k.x += pixel_noise * normal(rng), k.y += pixel_noise * normal(rng);
+      for (Keypoint2D& k : c.keypoints)
+        k.x += pixel_noise * normal(rng), k.y += pixel_noise * normal(rng);
     }
     if (edit) edit(f, solver.get(), &obs);
     run.results.push_back(solver->Solve(obs));
@@ -122,7 +124,8 @@ TEST(Ground, AJumpIsNotPulledDown) {
   with.floor_height = FloorOf(scene.skeleton, jump, 30);  // standing before the jump
   SolverOptions without;
   const int frames = 75;
-  const Track a = Solve(scene, jump, frames, 2.0, with), b = Solve(scene, jump, frames, 2.0, without);
+  const Track a = Solve(scene, jump, frames, 2.0, with),
+              b = Solve(scene, jump, frames, 2.0, without);
   const int top = static_cast<int>((take_off + flight / 2) * kRate);
   EXPECT_GT(a.results[top].costs.ground, 0.0);
   for (int f = static_cast<int>(take_off * kRate); f < frames; ++f) {
@@ -161,12 +164,13 @@ TEST(OneCamera, APoseBehindTheCameraIsReinitialised) {
   options.acceleration.enabled = options.motion.enabled = false;
   const Eigen::Vector3d camera = scene.rig.cameras[0].Center();
   const int jump = 30;
-  const Track track = Solve(scene, walk, 60, 1.0, options, [&](int f, Solver* s, FrameObservations*) {
-    if (f != jump) return;
-    Eigen::VectorXd away = s->pose();
-    away.head<3>() = camera + 150.0 * (camera - away.head<3>()).normalized();
-    s->SetWarmStart(away);
-  });
+  const Track track =
+      Solve(scene, walk, 60, 1.0, options, [&](int f, Solver* s, FrameObservations*) {
+        if (f != jump) return;
+        Eigen::VectorXd away = s->pose();
+        away.head<3>() = camera + 150.0 * (camera - away.head<3>()).normalized();
+        s->SetWarmStart(away);
+      });
   const SolveResult& r = track.results[jump];
   EXPECT_TRUE(r.flags & kReinitialised);
   EXPECT_EQ(r.status, SolveStatus::kOk);
@@ -188,23 +192,26 @@ TEST(OneCamera, OneFrameOfSwappedKeypointsDoesNotMoveTheBody) {
   std::vector<int> twin(scene.layout.size());
   for (int k = 0; k < scene.layout.size(); ++k) {
     std::string name = scene.layout.names[k];
-    for (const auto& [a, b] : {std::pair<std::string, std::string>{"left", "right"}, {"right", "left"}}) {
+    for (const auto& [a, b] :
+         {std::pair<std::string, std::string>{"left", "right"}, {"right", "left"}}) {
       if (const size_t at = scene.layout.names[k].find(a); at != std::string::npos) {
         name = scene.layout.names[k];
         name.replace(at, a.size(), b);
       }
     }
-    twin[k] = static_cast<int>(std::find(scene.layout.names.begin(), scene.layout.names.end(), name) -
-                               scene.layout.names.begin());
+    twin[k] =
+        static_cast<int>(std::find(scene.layout.names.begin(), scene.layout.names.end(), name) -
+                         scene.layout.names.begin());
   }
   SolverOptions options;
   options.floor_height = FloorOf(scene.skeleton, walk, 120);
   const int swapped = 40;
-  const Track track = Solve(scene, walk, 60, 1.0, options, [&](int f, Solver*, FrameObservations* o) {
-    if (f != swapped) return;
-    std::vector<Keypoint2D> k = o->cameras[0].keypoints;
-    for (size_t i = 0; i < k.size(); ++i) o->cameras[0].keypoints[i] = k[twin[i]];
-  });
+  const Track track =
+      Solve(scene, walk, 60, 1.0, options, [&](int f, Solver*, FrameObservations* o) {
+        if (f != swapped) return;
+        std::vector<Keypoint2D> k = o->cameras[0].keypoints;
+        for (size_t i = 0; i < k.size(); ++i) o->cameras[0].keypoints[i] = k[twin[i]];
+      });
   EXPECT_GT(track.results[swapped].costs.position,
             SolverOptions().max_keypoint_cost * track.results[swapped].counts.keypoints_used);
   EXPECT_LT(track.MaxRootError(20), 0.05);

@@ -136,8 +136,8 @@ class Solver {
   // the result before the fine pass), taken with `flag` and continuity kRestarted when it at
   // least halves the mean keypoint cost of *result; else nothing changes.
   void Recover(const CleanFrame& frame, const Eigen::VectorXd& start, int iterations,
-               const SolveResult& before, QualityFlag flag, Eigen::VectorXd* x,
-               SolveResult* result, Continuity* continuity) const;
+               const SolveResult& before, QualityFlag flag, Eigen::VectorXd* x, SolveResult* result,
+               Continuity* continuity) const;
   // The keypoints of a solution sit in the loss's tail: their mean cost is over
   // max_keypoint_cost.
   bool InLossTail(const SolveResult& result) const;

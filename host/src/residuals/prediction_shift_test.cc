@@ -44,8 +44,8 @@ class PredictionShiftTest : public ::testing::Test {
                          int bone, Eigen::Vector3d delta) {
     Eigen::VectorXd theta = theta_;
     Eigen::Vector3d a, b;
-    ASSERT_TRUE(shifted.Evaluate(Blocks(scene_.skeleton, bone, &theta, &delta).data(), a.data(),
-                                 nullptr));
+    ASSERT_TRUE(
+        shifted.Evaluate(Blocks(scene_.skeleton, bone, &theta, &delta).data(), a.data(), nullptr));
     ASSERT_TRUE(
         moved.Evaluate(ChainBlocks(scene_.skeleton, bone, theta.data()).data(), b.data(), nullptr));
     EXPECT_LT((a - b).norm(), 1e-9 * (1.0 + b.norm()));
@@ -78,8 +78,7 @@ TEST_F(PredictionShiftTest, AShiftedAccelerationTermMovesBothPreviousPositions) 
   const Eigen::Vector3d x1(0.2, -0.1, 1.0), x0(0.19, -0.1, 1.01), a(0.5, -2.0, 1.0);
   const Eigen::Vector3d delta(-0.04, 0.01, 0.06);
   for (const ImuSite& imu : scene_.imus) {
-    auto inner =
-        std::make_unique<AccelerationResidual>(fk_.get(), imu, x1, x0, h1, h2, a, weight);
+    auto inner = std::make_unique<AccelerationResidual>(fk_.get(), imu, x1, x0, h1, h2, a, weight);
     const double scale = inner->position_scale();
     const ShiftedPrediction shifted(std::move(inner), scale);
     const AccelerationResidual moved(fk_.get(), imu, x1 + delta, x0 + delta, h1, h2, a, weight);

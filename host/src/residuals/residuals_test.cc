@@ -7,6 +7,7 @@
 #include <memory>
 #include <random>
 
+#include "mocap/ground.h"
 #include "mocap/residuals/acceleration_residual.h"
 #include "mocap/residuals/calibration_residuals.h"
 #include "mocap/residuals/ground_residual.h"
@@ -15,7 +16,6 @@
 #include "mocap/residuals/pca_prior_residuals.h"
 #include "mocap/residuals/point_residual.h"
 #include "mocap/residuals/position_residual.h"
-#include "mocap/ground.h"
 #include "mocap/so3.h"
 #include "mocap/solver.h"
 #include "synthetic_scene.h"
@@ -321,8 +321,8 @@ TEST_F(ResidualsTest, GroundCostsTheContactSiteHeightAboveTheFloor) {
     ExpectJacobianCorrect(on_floor, ChainOf(scene_.skeleton, site.bone),
                           testing::Perturb(truth_, 0.2, 0.1, &rng_));
     double r = 1.0;
-    ASSERT_TRUE(on_floor.Evaluate(ChainBlocks(scene_.skeleton, site.bone, truth_.data()).data(),
-                                  &r, nullptr));
+    ASSERT_TRUE(on_floor.Evaluate(ChainBlocks(scene_.skeleton, site.bone, truth_.data()).data(), &r,
+                                  nullptr));
     EXPECT_LT(std::abs(r), 1e-12);
     // 3 cm above a floor at z - 0.03: 1.5 sigma; the root raised 10 cm adds 5 sigma.
     GroundResidual below(fk_.get(), site, z - 0.03, weight);
