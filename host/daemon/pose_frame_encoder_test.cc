@@ -15,8 +15,8 @@ TEST(PoseFrameEncoder, APoseFrameCarriesThePoseItsJointsAndWhatItWasSolvedWith) 
   SolveResult r;
   r.status = SolveStatus::kInitialised;
   r.theta = testing::RandomPose(scene.skeleton, &rng);
-  r.costs.position = 1.5, r.costs.pca_deviation = 0.25;
-  r.iterations = 7, r.solve_time_ms = 2.5, r.flags = kIterationLimit;
+  r.costs.position = 1.5, r.costs.pca_deviation = 0.25, r.costs.ground = 0.125;
+  r.iterations = 7, r.solve_time_ms = 2.5, r.flags = kIterationLimit | kReinitialised;
   FrameObservations frame;
   frame.cameras.resize(2), frame.cameras[0].camera = 2, frame.cameras[1].camera = 0;
   frame.imus.resize(2), frame.imus[0].imu = 3, frame.imus[1].imu = 5;
@@ -38,9 +38,11 @@ TEST(PoseFrameEncoder, APoseFrameCarriesThePoseItsJointsAndWhatItWasSolvedWith) 
   EXPECT_NEAR((q.toRotationMatrix() - pose.rotation[b]).norm(), 0, 1e-12);
   EXPECT_EQ(p.costs().position(), 1.5);
   EXPECT_EQ(p.costs().pca_deviation(), 0.25);
+  EXPECT_EQ(p.costs().ground(), 0.125);
   EXPECT_EQ(p.iterations(), 7);
   EXPECT_EQ(p.solve_time_ms(), 2.5);
-  EXPECT_EQ(p.quality_flags(), static_cast<uint32_t>(kIterationLimit));
+  EXPECT_EQ(p.quality_flags(), static_cast<uint32_t>(v1::PoseFrame::QUALITY_ITERATION_LIMIT |
+                                                     v1::PoseFrame::QUALITY_REINITIALISED));
   ASSERT_EQ(p.cameras_size(), 2);
   EXPECT_EQ(p.cameras(0), scene.rig.cameras[2].name);
   EXPECT_EQ(p.cameras(1), scene.rig.cameras[0].name);

@@ -27,6 +27,50 @@ ceres::LossFunction* MakeLoss(const TermOptions& t) {
   return nullptr;
 }
 
+namespace {
+
+// rho'(s) of a loss (null: trivial, 1), at least 0.
+double LossSlope(const ceres::LossFunction* loss, double s) {
+  double rho[3] = {s, 1.0, 0.0};
+  if (loss != nullptr) loss->Evaluate(s, rho);
+  return std::max(rho[1], 0.0);
+}
+
+}  // namespace
+
+Eigen::Matrix3d RootPositionInformation(const Skeleton& skeleton, const double* theta,
+                                        const Rig& rig, const KeypointLayout& layout,
+                                        const std::vector<Detection>& detections,
+                                        const TermOptions& position, const GroundContact& ground) {
+  BodyPose pose;
+  ForwardKinematics(skeleton, theta, &pose);
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  const std::unique_ptr<ceres::LossFunction> position_loss(MakeLoss(position));
+  // A keypoint's residual moves with the root's position as its site does: sqrt(w) dpi/dx.
+  for (const Detection& d : detections) {
+    const Site& site = layout.sites[d.keypoint];
+    Eigen::Vector2d pixel;
+    Eigen::Matrix<double, 2, 3> d_pixel;
+    if (!rig.cameras[d.camera].Project(
+            pose.position[site.bone] + pose.rotation[site.bone] * site.offset, &pixel, &d_pixel))
+      continue;  // left out of the solve
+    const double w = position.weight * d.confidence;
+    information += LossSlope(position_loss.get(), w * (pixel - d.pixel).squaredNorm()) * w *
+                   d_pixel.transpose() * d_pixel;
+  }
+  // E_G's residual moves with the root's height: sqrt(lambda_G) e_z.
+  const int lowest = ground.contacts != nullptr ? LowestSite(pose, *ground.contacts) : -1;
+  if (lowest >= 0) {
+    const Site& c = (*ground.contacts)[lowest];
+    const double height =
+        (pose.position[c.bone] + pose.rotation[c.bone] * c.offset).z() - ground.floor;
+    const std::unique_ptr<ceres::LossFunction> loss(MakeLoss(ground.options));
+    information(2, 2) +=
+        LossSlope(loss.get(), ground.options.weight * height * height) * ground.options.weight;
+  }
+  return information;
+}
+
 FrameProblem::FrameProblem(const Skeleton& skeleton, double* theta, bool shift_prediction)
     : skeleton_(skeleton),
       theta_(theta),
@@ -57,23 +101,14 @@ int FrameProblem::AddPositionTerms(const Rig& rig, const KeypointLayout& layout,
                                    const TermOptions& options) {
   BodyPose start;
   ForwardKinematics(skeleton_, x_.data(), &start);
-  const ceres::LossFunction* loss = Loss(kPositionTerm, options);
   int behind = 0;
   for (const Detection& d : detections) {
     const Site& site = layout.sites[d.keypoint];
     const Camera& cam = rig.cameras[d.camera];
     Eigen::Vector2d pixel;
-    Eigen::Matrix<double, 2, 3> d_pixel;
-    if (!cam.Project(start.position[site.bone] + start.rotation[site.bone] * site.offset, &pixel,
-                     shift_offset_ >= 0 ? &d_pixel : nullptr)) {
+    if (!cam.Project(start.position[site.bone] + start.rotation[site.bone] * site.offset, &pixel)) {
       ++behind;
       continue;
-    }
-    if (shift_offset_ >= 0) {  // the keypoint's information on the root (its position's)
-      const double w = options.weight * d.confidence;
-      double rho[3] = {0, 1, 0};
-      if (loss != nullptr) loss->Evaluate(w * (pixel - d.pixel).squaredNorm(), rho);
-      root_information_ += std::max(rho[1], 0.0) * w * d_pixel.transpose() * d_pixel;
     }
     auto* cost = new PositionResidual(&fk_, &cam, site, d.pixel, d.confidence, options.weight);
     owned_.emplace_back(cost);
@@ -125,14 +160,6 @@ void FrameProblem::AddGroundTerm(const std::vector<Site>& contacts, double floor
   ForwardKinematics(skeleton_, x_.data(), &start);
   const int lowest = LowestSite(start, contacts);
   if (lowest < 0) return;
-  if (shift_offset_ >= 0) {
-    const Site& c = contacts[lowest];
-    const double height = (start.position[c.bone] + start.rotation[c.bone] * c.offset).z() - floor;
-    double rho[3] = {0, 1, 0};
-    if (const ceres::LossFunction* loss = Loss(kGroundTerm, options))
-      loss->Evaluate(options.weight * height * height, rho);
-    root_information_(2, 2) += std::max(rho[1], 0.0) * options.weight;
-  }
   auto* cost = new GroundResidual(&fk_, contacts[lowest], floor, options.weight);
   owned_.emplace_back(cost);
   Add(kGroundTerm, cost, options, chain_offsets_[contacts[lowest].bone]);
@@ -152,9 +179,9 @@ void FrameProblem::AddPriorTerm(Term term, const LinearPriorResidual* cost,
   Add(term, cost, options, joints, &cost->gram());
 }
 
-void FrameProblem::AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift) {
+void FrameProblem::AddPredictionShiftPrior(const Eigen::Matrix3d& h, double slack,
+                                           double observed_ratio, double max_shift) {
   if (shift_offset_ < 0) return;
-  const Eigen::Matrix3d& h = root_information_;
   Eigen::Matrix3d information = h / slack + Eigen::Matrix3d::Identity() / (max_shift * max_shift);
   if (motion_information_ > 0.0)
     information += h * h / (slack * observed_ratio * motion_information_);

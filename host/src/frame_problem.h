@@ -17,10 +17,10 @@
 #include "mocap/kinematics.h"
 #include "mocap/observations.h"
 #include "mocap/sites.h"
+#include "mocap/solver_options.h"
 
 namespace mocap {
 
-struct TermOptions;
 class LinearPriorResidual;
 
 enum Term {
@@ -38,6 +38,21 @@ enum Term {
 
 // The loss a term's options name (null for the trivial loss); the caller owns it.
 ceres::LossFunction* MakeLoss(const TermOptions& term);
+
+// E_G's inputs: the contact sites (null: none), the floor, the term's options.
+struct GroundContact {
+  const std::vector<Site>* contacts = nullptr;
+  double floor = 0.0;
+  TermOptions options;
+};
+
+// The information of a frame's keypoints (those in front of their cameras) and ground contact
+// on the root's position at theta: sum of rho' J^T J of their residuals on it, robust weights
+// at theta (the prediction shift's H, prediction_shift.h).
+Eigen::Matrix3d RootPositionInformation(const Skeleton& skeleton, const double* theta,
+                                        const Rig& rig, const KeypointLayout& layout,
+                                        const std::vector<Detection>& detections,
+                                        const TermOptions& position, const GroundContact& ground);
 
 class FrameProblem {
  public:
@@ -61,15 +76,11 @@ class FrameProblem {
   // E_G on the lowest of `contacts` (ground.h) at theta; none when `contacts` is empty.
   void AddGroundTerm(const std::vector<Site>& contacts, double floor, const TermOptions& options);
   void AddPointTerm(const Site& site, const Eigen::Vector3d& target, const TermOptions& options);
-  // The prediction shift's prior (prediction_shift.h: kappa = slack, r = observed_ratio,
-  // sigma_max = max_shift), from the information of the position and ground terms added so
-  // far on the root's position at theta (root_information()) and the motion terms' own; none
-  // unless the problem shifts the prediction.
-  void AddPredictionShiftPrior(double slack, double observed_ratio, double max_shift);
-  // The position and ground terms' information on the root's position at theta, sum of
-  // rho' J^T J of their residuals on it: gathered as they are added when the prediction shifts
-  // (the keypoints' from the projection Jacobians their behind-the-camera check computes).
-  const Eigen::Matrix3d& root_information() const { return root_information_; }
+  // The prediction shift's prior (prediction_shift.h: H = root_information, kappa = slack,
+  // r = observed_ratio, sigma_max = max_shift), W the motion terms' added so far; none unless
+  // the problem shifts the prediction.
+  void AddPredictionShiftPrior(const Eigen::Matrix3d& root_information, double slack,
+                               double observed_ratio, double max_shift);
   // A prior term over the joint blocks; `cost` is owned by the caller and reused.
   void AddPriorTerm(Term term, const LinearPriorResidual* cost, const TermOptions& options);
 
@@ -93,7 +104,6 @@ class FrameProblem {
   Eigen::VectorXd x_;  // the parameters: the pose, then delta when the prediction shifts
   int shift_offset_;   // delta's offset in x_, -1 without it
   double motion_information_ = 0;  // the shifted motion terms' sum of position_scale^2
-  Eigen::Matrix3d root_information_ = Eigen::Matrix3d::Zero();
   KinematicsCache fk_;
   LmProblem problem_;
   std::vector<std::vector<int>> chain_offsets_;  // per bone: its chain's blocks in theta

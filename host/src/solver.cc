@@ -1,5 +1,6 @@
 #include "mocap/solver.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -50,6 +51,10 @@ bool Active(const TermOptions& t) { return t.enabled && t.weight > 0.0; }
 // scale where the keypoints see nothing, a frame of a run and more.
 constexpr double kObservedInformationRatio = 0.01;
 constexpr double kMaxPredictionShift = 0.2;
+// A frame whose every direction the shift would loosen by less than this is solved without it
+// (3 parameters fewer, the motion terms in their bones' groups: the solver benchmark's eight
+// cameras, x ~ 0.5, 3.5%).
+constexpr double kNegligibleLoosening = 0.1;
 
 // The layout's and the IMU sites' bones are the skeleton's.
 bool CheckSites(const Skeleton& skeleton, const KeypointLayout& layout,
@@ -204,10 +209,39 @@ void Solver::AddPriorTerms(FrameProblem* problem) const {
   }
 }
 
+GroundContact Solver::Ground() const {
+  GroundContact ground;
+  if (Active(options_.ground) && std::isfinite(options_.floor_height)) {
+    ground.contacts = &contact_sites_;
+    ground.floor = options_.floor_height;
+    ground.options = options_.ground;
+  }
+  return ground;
+}
+
+bool Solver::ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp) const {
+  const double w = MotionInformation(timestamp);
+  if (!(w > 0.0)) return false;
+  // The weakest direction's x = h / W, where the shift loosens the motion terms' pull on the
+  // root by the factor 1 + kappa / (x (1 + x / r)) (prediction_shift.h).
+  const double x =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(root_information, Eigen::EigenvaluesOnly)
+          .eigenvalues()[0] /
+      w;
+  return options_.prediction_slack >=
+         kNegligibleLoosening * x * (1.0 + x / kObservedInformationRatio);
+}
+
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
   // The motion terms' prediction may shift where the keypoints can pull it (prediction_shift.h).
-  const bool shift = use_acceleration && !frame.detections.empty() && options_.prediction_slack > 0;
+  Eigen::Matrix3d root_information = Eigen::Matrix3d::Zero();
+  bool shift = use_acceleration && !frame.detections.empty() && options_.prediction_slack > 0;
+  if (shift) {
+    root_information = RootPositionInformation(skeleton_, x->data(), rig_, layout_,
+                                               frame.detections, options_.position, Ground());
+    shift = ShiftMatters(root_information, frame.timestamp);
+  }
   FrameProblem problem(skeleton_, x->data(), shift);
   if (Active(options_.position)) {
     TermOptions position = options_.position;
@@ -215,8 +249,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
-  if (Active(options_.ground) && std::isfinite(options_.floor_height)) {
-    problem.AddGroundTerm(contact_sites_, options_.floor_height, options_.ground);
+  if (const GroundContact ground = Ground(); ground.contacts != nullptr) {
+    problem.AddGroundTerm(*ground.contacts, ground.floor, ground.options);
   }
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (slips_.distrusted(static_cast<int>(i))) {
@@ -236,8 +270,8 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     }
   }
   if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);
-  problem.AddPredictionShiftPrior(options_.prediction_slack, kObservedInformationRatio,
-                                  kMaxPredictionShift);
+  problem.AddPredictionShiftPrior(root_information, options_.prediction_slack,
+                                  kObservedInformationRatio, kMaxPredictionShift);
   AddPriorTerms(&problem);
   result->counts.keypoints_used = problem.count(kPositionTerm);
   result->counts.orientations_used = problem.count(kOrientationTerm);

@@ -107,6 +107,20 @@ void Solver::Remember(const CleanFrame& frame, const BodyPose& pose, bool positi
   if (position_constrained) last_fix_ = frame.timestamp;
 }
 
+double Solver::MotionInformation(double timestamp) const {
+  const double h1 = motion_->step, h2 = timestamp - motion_->timestamp;
+  const double per_unit_weight = 4.0 / (h2 * h2 * (h1 + h2) * (h1 + h2));  // (2 / (h2 (h1 + h2)))^2
+  int accelerations = 0, points = 0;
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    accelerations += !slips_.distrusted(static_cast<int>(i)) && motion_->velocity[i].has_value() &&
+                     motion_->accel[i].has_value();
+  }
+  if (accelerations > 0 && options_.acceleration.enabled)
+    return accelerations * options_.acceleration.weight * per_unit_weight;
+  for (const auto& v : motion_->point_velocity) points += v.has_value();
+  return options_.motion.enabled ? points * options_.motion.weight * per_unit_weight : 0.0;
+}
+
 void Solver::AddMotionTerms(double timestamp, FrameProblem* problem) const {
   const TermOptions& term = options_.motion;
   if (!term.enabled || !(term.weight > 0.0) || problem->count(kAccelerationTerm) > 0) return;

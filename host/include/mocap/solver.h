@@ -24,8 +24,9 @@
 
 namespace mocap {
 
-struct CleanFrame;   // src/frame_validation.h
-class FrameProblem;  // src/frame_problem.h
+struct CleanFrame;     // src/frame_validation.h
+class FrameProblem;    // src/frame_problem.h
+struct GroundContact;  // src/frame_problem.h
 
 // Fits theta (in place, from its current value) to 3D target points of sites by least
 // squares; targets with a non-positive or non-finite weight (1/m^2) are ignored. Returns
@@ -154,6 +155,14 @@ class Solver {
   void AddMotionTerms(double timestamp, FrameProblem* problem) const;
   // E_PP and E_PD, when there is a prior and they are on.
   void AddPriorTerms(FrameProblem* problem) const;
+  // E_G's contact sites, floor and options (no contacts when the floor is unknown or E_G off).
+  GroundContact Ground() const;
+  // The motion terms' information on the root's position at `timestamp` (prediction_shift.h's
+  // W): those E_A or E_M would add, each (2 / (h2 (h1 + h2)))^2 times its weight.
+  double MotionInformation(double timestamp) const;
+  // Whether the prediction shift can change the frame: some direction the keypoints and ground
+  // contact observe (root_information) less than the motion terms (prediction_shift.h).
+  bool ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp) const;
   // One Levenberg-Marquardt solve of the frame from *x, with the motion terms when
   // use_acceleration (E_A, or E_M where no IMU measures acceleration). False (status and
   // message set in *result) when nothing constrains the pose or the optimiser fails.

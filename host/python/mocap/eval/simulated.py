@@ -18,7 +18,7 @@ from mocap.sim import messages as sim_messages
 from mocap.sim import take as sim_take
 
 TERMS = {"R": "orientation", "P": "position", "A": "acceleration", "PP": "pca_projection", "PD": "pca_deviation",
-         "M": "motion"}
+         "M": "motion", "G": "ground"}
 
 
 def options_for(omit: list[str], settings: list[str] = ()) -> _core.SolverOptions:
