@@ -232,6 +232,27 @@ bool Solver::ShiftMatters(const Eigen::Matrix3d& root_information, double timest
          kNegligibleLoosening * x * (1.0 + x / kObservedInformationRatio);
 }
 
+void Solver::AddImuTerms(const CleanFrame& frame, bool use_acceleration, FrameProblem* problem,
+                         SolveResult* result) const {
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (slips_.distrusted(static_cast<int>(i))) {
+      result->counts.orientations_distrusted += frame.imu_world[i].has_value();
+      continue;
+    }
+    if (frame.imu_world[i] && Active(options_.orientation)) {
+      problem->AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
+    }
+    if (use_acceleration && motion_->velocity[i] && motion_->accel[i] &&
+        Active(options_.acceleration)) {
+      // The previous step's velocity stands in for x(t0): x(t1) - v h1 (MotionState).
+      const Eigen::Vector3d& x1 = motion_->position[i];
+      problem->AddAccelerationTerm(imus_[i], x1, x1 - *motion_->velocity[i] * motion_->step,
+                                   motion_->step, frame.timestamp - motion_->timestamp,
+                                   *motion_->accel[i], options_.acceleration);
+    }
+  }
+}
+
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
   // The motion terms' prediction may shift where the keypoints can pull it (prediction_shift.h).
@@ -252,23 +273,7 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   if (const GroundContact ground = Ground(); ground.contacts != nullptr) {
     problem.AddGroundTerm(*ground.contacts, ground.floor, ground.options);
   }
-  for (size_t i = 0; i < imus_.size(); ++i) {
-    if (slips_.distrusted(static_cast<int>(i))) {
-      result->counts.orientations_distrusted += frame.imu_world[i].has_value();
-      continue;
-    }
-    if (frame.imu_world[i] && Active(options_.orientation)) {
-      problem.AddOrientationTerm(imus_[i], *frame.imu_world[i], options_.orientation);
-    }
-    if (use_acceleration && motion_->velocity[i] && motion_->accel[i] &&
-        Active(options_.acceleration)) {
-      // The previous step's velocity stands in for x(t0): x(t1) - v h1 (MotionState).
-      const Eigen::Vector3d& x1 = motion_->position[i];
-      problem.AddAccelerationTerm(imus_[i], x1, x1 - *motion_->velocity[i] * motion_->step,
-                                  motion_->step, frame.timestamp - motion_->timestamp,
-                                  *motion_->accel[i], options_.acceleration);
-    }
-  }
+  AddImuTerms(frame, use_acceleration, &problem, result);
   if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);
   problem.AddPredictionShiftPrior(root_information, options_.prediction_slack,
                                   kObservedInformationRatio, kMaxPredictionShift);

@@ -155,6 +155,10 @@ class Solver {
   void AddMotionTerms(double timestamp, FrameProblem* problem) const;
   // E_PP and E_PD, when there is a prior and they are on.
   void AddPriorTerms(FrameProblem* problem) const;
+  // E_R of each trusted IMU with an orientation, and E_A (use_acceleration) of each with a
+  // velocity and an acceleration; the distrusted sensors' orientations counted in *result.
+  void AddImuTerms(const CleanFrame& frame, bool use_acceleration, FrameProblem* problem,
+                   SolveResult* result) const;
   // E_G's contact sites, floor and options (no contacts when the floor is unknown or E_G off).
   GroundContact Ground() const;
   // The motion terms' information on the root's position at `timestamp` (prediction_shift.h's

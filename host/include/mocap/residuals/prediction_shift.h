@@ -27,9 +27,10 @@
 //    gain alpha): the root follows the keypoints' innovation by kappa / (1 + kappa) per frame
 //    instead of dead-reckoning away.
 //  - Observed (x >> r): the pull tends to W (within kappa r / x^2), where E_A's weight and
-//    velocity filter were tuned (eight cameras, x ~ 0.2-0.4: within 6-24%; the results are
-//    those without the shift). Two cameras (x ~ 0.03-0.1) and one camera's other directions
-//    (~0.07) are in between.
+//    velocity filter were tuned (eight cameras, x ~ 0.2-0.4: within 6-24%, and the results
+//    are those without the shift). Two cameras (x ~ 0.03-0.1) and one camera's other
+//    directions (~0.07) are in between. A frame whose every direction would be loosened by
+//    less than 10% is solved without delta (Solver::ShiftMatters).
 // (x: geometric means over the frames of cmu-daz/10_02, the validation kick, by eigenvector of H.)
 // sigma_max bounds the shift where the keypoints see nothing (a frame whose few keypoints
 // leave a direction free).
