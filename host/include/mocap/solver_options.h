@@ -61,9 +61,10 @@ struct SolverOptions {
   // (measured on the evaluation clips).
   TermOptions pca_deviation{true, 1.0, LossType::kTrivial, 1.0};
   // E_G (residuals/ground_residual.h): the lowest foot contact point on the floor, on frames
-  // whose floor_height is known. SIGMA_G below: the height a stance foot's lowest contact site
-  // varies by on the clips' walks (the sites are an idealised sole); Cauchy, so a jump's or a
-  // run's flight phase, decimetres up, costs and pulls little (GROUND_RATIONALE).
+  // whose floor_height is known. 2 cm: the lowest contact site's spread about the floor on the
+  // clips' frames (quartiles within 3 cm: an idealised sole on mocap whose feet dip and
+  // float); Cauchy, so a jump's or a run's flight, decimetres up, costs and pulls little
+  // (host/README.md, the per-frame solve).
   TermOptions ground{true, 1.0 / (0.02 * 0.02), LossType::kCauchy, 1.0};  // 2 cm
   // The floor's height (world z, metres), as FloorHeight (ground.h) defines it from poses: the
   // median of each pose's lowest foot contact site, so a sole's thickness is part of it. NaN:
