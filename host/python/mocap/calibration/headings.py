@@ -33,6 +33,13 @@ def yaw_deg(reference: np.ndarray) -> float:
     return float(np.degrees(np.arctan2(r[1, 0], r[0, 0])))
 
 
+def accelerometer_report(yaw: float, sigma: float) -> dict:
+    """An IMU's accelerometer heading (rad, sigma rad; infinite sigma: none) as the report gives it."""
+    if not np.isfinite(sigma):
+        return {"heading_accelerometer_deg": None, "heading_accelerometer_sigma_deg": None}
+    return {"heading_accelerometer_deg": float(np.degrees(yaw)), "heading_accelerometer_sigma_deg": float(np.degrees(sigma))}
+
+
 def contradicted(result, accelerometer: dict[str, tuple[float, float]]) -> dict[str, dict]:
     """The sensors of a window result whose heading is further from their accelerometer's than
     the check allows: name -> (window_deg, accelerometer_deg, sigma_deg)."""

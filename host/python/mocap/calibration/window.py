@@ -327,7 +327,7 @@ def _report(w: _Window, start: _Start, solved: _Solved, frames: int, quick: bool
         "imus_left_out": solved.left_out,
         "imus": {s.name: {"bone": skel.bone_names[s.bone], "first_residual_deg": r0, "residual_deg": r,
                           "heading_deg": float(np.degrees(np.arctan2(s.reference[1, 0], s.reference[0, 0]))),
-                          **_accelerometer_report(*solved.accelerometer[s.name]),
+                          **headings.accelerometer_report(*solved.accelerometer[s.name]),
                           "mount": rotations.log(np.asarray(s.mount)).tolist()}
                  for s, r0, r in zip(result.imus, start.residuals_deg, result.imu_residual_deg)}}
 
@@ -345,12 +345,6 @@ def _estimate_sites(first, rig: _core.Rig, frames: list, options: _core.Calibrat
     second = _core.calibrate_window(first.skeleton, rig, first.layout, list(first.imus), prior.load(), frames,
                                     list(first.thetas), o)
     return second.layout, second.thetas, np.asarray(second.site_directions)
-
-
-def _accelerometer_report(yaw: float, sigma: float) -> dict:
-    if not np.isfinite(sigma):
-        return {"heading_accelerometer_deg": None, "heading_accelerometer_sigma_deg": None}
-    return {"heading_accelerometer_deg": float(np.degrees(yaw)), "heading_accelerometer_sigma_deg": float(np.degrees(sigma))}
 
 
 def _window_motion(skel, rig, layout, imus: list, detections, times, readings: ImuReadings) -> np.ndarray:
