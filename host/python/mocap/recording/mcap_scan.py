@@ -143,6 +143,8 @@ def block_messages(mm, block: Block) -> Iterator[tuple[int, int, int, int, bytes
         data, start, end = mm, block.offset + RECORD.size, block.end
     else:
         data, _ = chunk_data(mm, block.offset, block.end)
+        if data is None:  # checked when scanned: the file changed since
+            return
         start, end = 0, len(data)
     for opcode, start, end in records(data, start, end):
         if opcode == MESSAGE:

@@ -79,8 +79,8 @@ class Integrity:
             parts.append(f"{sum(self.chunks_skipped.values())} damaged chunks skipped "
                          f"({', '.join(f'{n} {why}' for why, n in self.chunks_skipped.items())}; "
                          f"{self.skipped_s:.2f} s)")
-        if self.chunks_intended not in (None, self.chunks) and not self.chunks_skipped:
-            parts.append(f"{self.chunks_intended} chunks written")
+        if self.chunks_intended not in (None, self.chunks):
+            parts.append(f"{self.chunks_intended - self.chunks} of the {self.chunks_intended} chunks written not read")
         if self.bytes_damaged:
             parts.append(f"{self.bytes_damaged} damaged bytes passed over")
         if self.messages_lost:
