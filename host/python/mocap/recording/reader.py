@@ -73,8 +73,9 @@ class Integrity:
         if self.intended_s is not None:
             parts.append(f"of {self.intended_s:.2f} s recorded")
         if not self.complete:
-            parts.append(f"cut short ({self.bytes_after_last_record} bytes after the last intact record; the end "
-                         "index is missing, so how long it was meant to be is unknown)")
+            unknown = "; how long it was meant to be is unknown" if self.intended_s is None else ""
+            parts.append(f"cut short or its end index damaged ({self.bytes_after_last_record} bytes after the last "
+                         f"intact record{unknown})")
         if self.chunks_skipped:
             parts.append(f"{sum(self.chunks_skipped.values())} damaged chunks skipped "
                          f"({', '.join(f'{n} {why}' for why, n in self.chunks_skipped.items())}; "
