@@ -71,15 +71,21 @@ def calibrate(recording_path: Path, out: Path, session: Path | None = None, seco
     session into `out`; the report."""
     recording_path, out = Path(recording_path), Path(out)
     first, last = span_ns if span_ns is not None else (-(2 ** 63), 2 ** 63 - 1)
-    with tempfile.TemporaryDirectory() as attached:
+    with tempfile.TemporaryDirectory() as attached, reader.Recording(recording_path) as recording:
         if session is None:
-            session = reader.read_session(recording_path, attached)
+            session = recording.session(attached)
             if session is None:
                 raise InputError(f"{recording_path}: no session is attached; give one with --session")
         session = Path(session).resolve()
-        messages = ((m.log_time_ns, m.type_name, m.payload) for m in reader.read(recording_path)
+        messages = ((m.log_time_ns, m.type_name, m.payload) for m in recording.messages()
                     if first <= m.log_time_ns <= last)
-        estimated = estimate(messages, session, seconds, str(recording_path))
-        report = {"recording": str(recording_path), "session": str(session), **estimated.report}
+        try:
+            estimated = estimate(messages, session, seconds, str(recording_path))
+        except InputError as e:
+            if recording.integrity.intact:
+                raise
+            raise InputError(f"{e} (the recording: {recording.integrity.describe()})") from None
+        report = {"recording": str(recording_path), "session": str(session), **estimated.report,
+                  "integrity": recording.integrity.as_dict()}
         write_session(out, session, estimated, report)
     return report

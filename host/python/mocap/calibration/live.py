@@ -106,7 +106,12 @@ PR_SET_PDEATHSIG = 1  # prctl(2): the signal a process gets when its parent dies
 
 def _worker_start(parent_pid: int) -> None:
     """In the worker: low priority, and ended with its parent. A forked worker outlives a
-    killed parent otherwise (blocked on a pipe it holds both ends of)."""
+    killed parent otherwise (blocked on a pipe it holds both ends of). The kernel's
+    parent-death signal rather than spawn and a pipe only the parent holds: nothing has to
+    run in the worker (no watcher thread to read that pipe and exit, whatever the job is
+    doing), it holds for SIGKILL of the parent as for SIGTERM, and the pool keeps fork. It
+    is sent when the *thread* that forked the worker ends: WorkerPool is made and used by
+    one thread (follow's), which outlives the pool. Linux only, as mocapd."""
     os.nice(10)
     libc = ctypes.CDLL(None, use_errno=True)
     libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)

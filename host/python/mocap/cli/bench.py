@@ -1,10 +1,11 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer)."""
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer, recording)."""
 
 from __future__ import annotations
 
 import argparse
 import json
 
+from mocap.demo import record_drill
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, MocapError
 from mocap.eval import bench, edge_detector, peer
@@ -12,7 +13,7 @@ from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "edge", "firmware", "hub", "peer"]
+KINDS = ["solver", "live", "edge", "firmware", "hub", "peer", "recording"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
         print(json.dumps(live.bench(seconds=args.live_seconds, realtime=not args.live_normal_priority)), flush=True)
+    if "recording" in args.only:  # the recorder killed mid-take: what its file keeps
+        print(json.dumps(record_drill.bench()), flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)

@@ -62,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     report = from_recording.calibrate(recorded, Path(args.out), Path(args.session) if args.session else None,
                                       args.seconds, tuple(args.span) if args.span else None)
     print(json.dumps({"session": str(Path(args.out) / "session.json"), "frames": report["frames"],
-                      "imus_calibrated": len(report["imus_calibrated"]), "imus_missing": report["imus_missing"]}),
+                      "imus_calibrated": len(report["imus_calibrated"]), "imus_missing": report["imus_missing"],
+                      "integrity": report["integrity"]}),
           flush=True)
     return 0

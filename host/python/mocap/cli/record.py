@@ -22,7 +22,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     stop = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: stop.set())  # Ctrl-C ends the recording cleanly
+    for sig in (signal.SIGINT, signal.SIGTERM):  # Ctrl-C, systemctl stop: the file is closed properly
+        signal.signal(sig, lambda *_: stop.set())
     counts = recorder.record(args.connect, args.out, args.seconds, stop, session=args.session)
     print(json.dumps({"out": args.out, "recorded": counts.recorded, "dropped": counts.dropped}), flush=True)
     return 0

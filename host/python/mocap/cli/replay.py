@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from mocap.recording import replay
+from mocap.recording import reader, replay
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,7 +23,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    sent = replay.replay(args.file, args.bind, None if args.max_speed else args.speed, args.topics,
-                         restamp=args.restamp)
-    print(json.dumps({"file": args.file, "sent": sent}), flush=True)
+    with reader.Recording(args.file) as recording:
+        sent = replay.replay(recording, args.bind, None if args.max_speed else args.speed, args.topics,
+                             restamp=args.restamp)
+    print(json.dumps({"file": args.file, "sent": sent, "integrity": recording.integrity.as_dict()}), flush=True)
     return 0

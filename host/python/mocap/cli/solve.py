@@ -44,17 +44,20 @@ def run(args: argparse.Namespace) -> int:
         return _take(args)
     if args.set:
         raise InputError("--set is for --take (a recording is solved with its session's options)")
-    with tempfile.TemporaryDirectory() as folder:
-        session = Path(args.session) if args.session else reader.read_session(args.recording, folder)
+    with tempfile.TemporaryDirectory() as folder, reader.Recording(args.recording) as recording:
+        session = Path(args.session) if args.session else recording.session(folder)
         if session is None:
             raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
-        poses, dropped, skeleton = offline.solve_recording(Path(args.recording), session)
+        poses, dropped, skeleton = offline.solve_recording(recording, session)
+    integrity = recording.integrity
     if not poses:
-        raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped})")
+        raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped}; the recording: "
+                         f"{integrity.describe()})")
     thetas = np.array([list(p.theta) for p in poses])
     write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))  # the latest calibration's skeleton
     if args.csv:  # the bones as solved, each frame with the calibration in use then
         times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
         write_positions_csv(args.csv, skeleton.bone_names, offline.joint_positions(poses), times)
-    print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped}), flush=True)
+    print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped, "integrity": integrity.as_dict()}),
+          flush=True)
     return 0

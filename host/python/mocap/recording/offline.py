@@ -20,18 +20,23 @@ from mocap.recording import reader
 INPUT_TOPICS = ("/camera/", "/imu/", "/calibration/")
 
 
-def solve_recording(path: Path, session: Path | None = None) -> tuple[list, dict, _core.Skeleton]:
+def solve_recording(recording: Path | reader.Recording, session: Path | None = None) -> tuple[list, dict, _core.Skeleton]:
     """PoseFrames of the recording's inputs (/camera/*, /imu/*, and the live calibrator's
     /calibration/*) solved with the session's skeleton, rig, layout and IMU set (by default
     the session attached to the recording), as calibrations came; the inputs dropped, by
-    reason; and the skeleton in use at the end (the latest calibration's)."""
+    reason; and the skeleton in use at the end (the latest calibration's). A recording cut
+    short or damaged gives what its intact chunks hold (its Integrity says what is lost)."""
+    if not isinstance(recording, reader.Recording):  # a path
+        with reader.Recording(recording) as opened:
+            return solve_recording(opened, session)
     if session is None:
         with tempfile.TemporaryDirectory() as folder:
-            attached = reader.read_session(path, folder)
+            attached = recording.session(folder)
             if attached is None:
-                raise InputError(f"{path}: no session is attached to this recording; give its session file")
-            return solve_recording(path, attached)
-    messages = ((m.log_time_ns, m.type_name, m.payload) for m in reader.read(path) if m.topic.startswith(INPUT_TOPICS))
+                raise InputError(f"{recording.path}: no session is attached to this recording; give its session file")
+            return solve_recording(recording, attached)
+    messages = ((m.log_time_ns, m.type_name, m.payload) for m in recording.messages()
+                if m.topic.startswith(INPUT_TOPICS))
     pipeline = pipeline_for(session)
     return solve_messages(pipeline, messages), dict(pipeline.dropped), pipeline.skeleton
 

@@ -17,6 +17,13 @@ serialised FileDescriptorSet of the type's .proto file and all its dependencies.
 recording is thus self-describing (Foxglove opens it as is; reading needs no generated code).
 A session attached (`attach_session`) travels as attachments session/session.json and the
 files it names (mocap.recording.reader.read_session extracts them).
+
+A recorder killed (SIGKILL, a power cut of the process) leaves every chunk it closed: a chunk
+is closed and handed to the OS when CHUNK_S has passed since its first message (or at
+CHUNK_BYTES), so a kill loses the last CHUNK_S of messages at most, plus what the writer had
+not taken from its queue (mocap.recording.recover makes the file indexed again). Shorter
+chunks lose less and cost more: each adds its header, message indexes and an index entry,
+and compresses worse (docs/reliability.md, "Recordings", measures both).
 """
 
 from __future__ import annotations
@@ -40,7 +47,9 @@ from mocap.net import transport, wire
 
 log = logging.getLogger(__name__)
 
-POLL_MS = 100  # how often `record` checks its stop conditions
+POLL_MS = 100  # how often `record` checks its stop conditions (and closes a chunk that is due)
+CHUNK_S = 0.25  # a chunk is closed at most this long after its first message: what a kill can lose
+CHUNK_BYTES = 1 << 20  # ... or when it reaches this size (mcap's default)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,12 +94,16 @@ def file_descriptor_set(message_descriptor) -> bytes:
 class Recorder:
     """Writes well-formed mocap.v1 messages to an MCAP file; counts and skips the others."""
 
-    def __init__(self, path: str | Path, on_record: Callable[[str, Message], None] | None = None):
+    def __init__(self, path: str | Path, on_record: Callable[[str, Message], None] | None = None,
+                 chunk_s: float = CHUNK_S, clock: Callable[[], float] = time.monotonic):
         """on_record, if given, is called with the topic and the decoded message of every
-        recorded message (progress, a calibration's watch on the motion, tests)."""
+        recorded message (progress, a calibration's watch on the motion, tests). chunk_s: the
+        longest a chunk stays open, by `clock` (s)."""
         self._on_record = on_record
-        self._writer = Writer(str(path))
+        self._file = open(path, "wb")
+        self._writer = Writer(self._file, chunk_size=CHUNK_BYTES)
         self._writer.start(profile="protobuf", library="mocap recording")
+        self._chunk_s, self._clock, self._chunk_opened = chunk_s, clock, None
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
         self._closed = False
@@ -109,9 +122,25 @@ class Recorder:
         self._writer.add_message(self._channel_id(topic, message.DESCRIPTOR), log_time=log_time_ns,
                                  data=bytes(frames[1]), publish_time=max(own_time_ns, 0))  # MCAP times are unsigned
         self.recorded[topic] += 1
+        self._chunk_opened = self._clock() if self._chunk_opened is None else self._chunk_opened
+        self.flush_if_due()
         if self._on_record is not None:
             self._on_record(topic, message)
         return True
+
+    def flush_if_due(self) -> None:
+        """Closes the open chunk if it has been open for chunk_s (call it while idle too)."""
+        if self._chunk_opened is not None and self._clock() - self._chunk_opened >= self._chunk_s:
+            self.flush()
+
+    def flush(self) -> None:
+        """Closes the open chunk and hands the file's bytes to the OS: they survive a kill of
+        this process (not a power cut: no fsync). mcap's Writer closes a chunk only when it
+        outgrows chunk_size and has no public call for it; this is the method its finish()
+        uses (mcap==1.2.2, pinned; tests/test_recording.py checks the chunks' times)."""
+        self._writer._Writer__finalize_chunk()
+        self._file.flush()
+        self._chunk_opened = None
 
     def attach_session(self, session: str | Path) -> None:
         """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
@@ -124,6 +153,7 @@ class Recorder:
                 self._attach(f"session/{key}.json", source.read_bytes())
                 renamed[key] = f"{key}.json"
         self._attach("session/session.json", dataclasses.replace(config, **renamed).dumps().encode())
+        self._file.flush()
 
     def _attach(self, name: str, data: bytes) -> None:
         now = time.time_ns()
@@ -135,7 +165,8 @@ class Recorder:
     def close(self) -> None:
         if not self._closed:
             self._closed = True
-            self._writer.finish()  # writes the index and closes the file
+            self._writer.finish()  # writes the index
+            self._file.close()
 
     def __enter__(self) -> Recorder:
         return self
@@ -174,6 +205,7 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
             try:
                 frames, stamp = received.get(timeout=POLL_MS / 1000)
             except queue.Empty:
+                recorder.flush_if_due()
                 continue
             recorder.write(frames, stamp)
         return recorder.counts()
@@ -186,3 +218,7 @@ def _receive(endpoints: list[str], received: queue.Queue, stop: threading.Event,
             if socket.poll(POLL_MS):
                 frames = socket.recv_multipart()
                 received.put((frames, time.time_ns()))
+        for _ in range(transport.SUBSCRIBER_HWM):  # what had arrived when told to stop is recorded too
+            if not socket.poll(0):
+                break
+            received.put((socket.recv_multipart(), time.time_ns()))

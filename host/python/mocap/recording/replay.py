@@ -19,7 +19,7 @@ INPUT_TOPICS = ("/camera/*", "/imu/*", "/calibration/*")  # what `replay` sends 
 BACKPRESSURE_SLEEP_S = 0.001  # `replay`'s pause while a subscriber's queue is full
 REPLAY_LINGER_MS = 10_000  # time the last queued messages get to reach slow subscribers
 
-def replay(path: str | Path, endpoint: str, speed: float | None = 1.0, topics: Iterable[str] | None = None,
+def replay(recording: str | Path | reader.Recording, endpoint: str, speed: float | None = 1.0, topics: Iterable[str] | None = None,
            wait_for_subscribers: float = 1.0, restamp: bool = False) -> int:
     """Publishes the recorded messages on `endpoint` as [type, payload]; returns how many were sent.
 
@@ -29,6 +29,8 @@ def replay(path: str | Path, endpoint: str, speed: float | None = 1.0, topics: I
     high-water mark (XPUB_NODROP) and the replay sleeps BACKPRESSURE_SLEEP_S and retries, so a slow
     subscriber slows the replay down instead of losing messages.
     Sending starts when a first subscriber has joined, or after wait_for_subscribers seconds.
+    A recording cut short or damaged is replayed as far as its intact chunks go (recording:
+    a file, or a reader.Recording open already).
     restamp (with a speed): every capture, sample and send time is moved by the time between
     the recording and now, so a live host takes the replay for a take happening now (its
     synchroniser waits for inputs by their capture time); the recording's own bytes otherwise.
@@ -37,14 +39,15 @@ def replay(path: str | Path, endpoint: str, speed: float | None = 1.0, topics: I
         raise InputError("restamping needs a replay speed: as fast as possible has no 'now'")
     if speed is not None and not speed > 0:
         raise InputError(f"replay speed must be positive, not {speed}")
+    if not isinstance(recording, reader.Recording):  # a path
+        with reader.Recording(recording) as opened:
+            return replay(opened, endpoint, speed, topics, wait_for_subscribers, restamp)
     patterns = tuple(INPUT_TOPICS if topics is None else topics)
-    with open(path, "rb") as stream:
-        messages = (m for m in reader.messages(stream, str(path))
-                    if any(fnmatch.fnmatchcase(m.topic, p) for p in patterns))
-        with zmq.Context() as context, _replay_socket(context, endpoint) as socket:
-            if socket.poll(wait_for_subscribers * 1000):
-                socket.recv()  # the first subscription
-            return _publish(socket, messages, speed, restamp)
+    messages = (m for m in recording.messages() if any(fnmatch.fnmatchcase(m.topic, p) for p in patterns))
+    with zmq.Context() as context, _replay_socket(context, endpoint) as socket:
+        if socket.poll(wait_for_subscribers * 1000):
+            socket.recv()  # the first subscription
+        return _publish(socket, messages, speed, restamp)
 
 
 def _publish(socket: zmq.Socket, messages: Iterable[RecordedMessage], speed: float | None,
@@ -65,6 +68,13 @@ def _publish(socket: zmq.Socket, messages: Iterable[RecordedMessage], speed: flo
 def _shifted(m: RecordedMessage, offset_ns: int) -> bytes:
     """The message with its times moved by offset_ns (inputs only; others unchanged)."""
     message = wire.TYPES[m.type_name].FromString(m.payload)
+    shift(message, offset_ns)
+    return message.SerializeToString()  # closing the socket then waits (LINGER) for the queued messages to leave
+
+
+def shift(message, offset_ns: int) -> None:
+    """Moves the times a host reads of an input message (capture, sample and send times; a
+    calibration's valid_from) by offset_ns, in place; other messages are left as they are."""
     if isinstance(message, wire.KeypointFrame):
         message.capture_time_ns += offset_ns
         message.send_time_ns += offset_ns if message.send_time_ns else 0
@@ -74,7 +84,6 @@ def _shifted(m: RecordedMessage, offset_ns: int) -> bytes:
             sample.sample_time_ns += offset_ns
     elif isinstance(message, wire.Calibration):  # from the same moment of the take
         message.valid_from_ns += offset_ns
-    return message.SerializeToString()  # closing the socket then waits (LINGER) for the queued messages to leave
 
 
 def _replay_socket(context: zmq.Context, endpoint: str) -> zmq.Socket:
