@@ -271,7 +271,9 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
   if (const GroundContact ground = Ground(); ground.contacts != nullptr) {
-    problem.AddGroundTerm(*ground.contacts, ground.floor, ground.options);
+    TermOptions floor = ground.options;  // wider where nothing else holds the height
+    if (frame.detections.empty()) floor.loss_scale *= options_.ground_unobserved_scale;
+    problem.AddGroundTerm(*ground.contacts, ground.floor, floor);
   }
   AddImuTerms(frame, use_acceleration, &problem, result);
   if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);

@@ -28,6 +28,8 @@ bool SolverOptions::IsValid(std::string* error) const {
   });
   check.Expect(accel_at_rest.allFinite(), "accel_at_rest", "finite");
   check.Expect(!std::isinf(floor_height), "floor_height", floor_height, "finite, or NaN: unknown");
+  check.Expect(ground_unobserved_scale >= 1.0 && std::isfinite(ground_unobserved_scale),
+               "ground_unobserved_scale", ground_unobserved_scale, "finite and >= 1");
   check.Expect(min_confidence >= 0.0 && min_confidence < 1.0, "min_confidence", min_confidence,
                "in [0, 1)");
   check.Expect(max_quaternion_error > 0.0, "max_quaternion_error", max_quaternion_error, "> 0");

@@ -66,6 +66,14 @@ struct SolverOptions {
   // float); Cauchy, so a jump's or a run's flight, decimetres up, costs and pulls little
   // (host/README.md, the per-frame solve).
   TermOptions ground{true, 1.0 / (0.02 * 0.02), LossType::kCauchy, 1.0};  // 2 cm
+  // E_G on frames without keypoints (IMUs only): nothing else observes the root's height,
+  // and the acceleration term's dead reckoning drifts (accelerometer bias, tilt error): the
+  // body rose 28 cm in 4 s without cameras on a test clip, E_G's Cauchy giving up beyond a
+  // few cm. There its loss scale is multiplied by this (25: quadratic to ~10 cm), which holds
+  // the height. Its weight as well (stiffer) held a synthetic 0.3 m/s^2 bias better but
+  // drifted more on the test clips (docs/results.md, "Cameras lost"); a stance foot held in
+  // place was tried and left out too: the clips' feet slide 0.2 cm per frame on the floor.
+  double ground_unobserved_scale = 25.0;
   // The floor's height (world z, metres), as FloorHeight (ground.h) defines it from poses: the
   // median of each pose's lowest foot contact site, so a sole's thickness is part of it. NaN:
   // unknown, and E_G is off (a session without a floor estimate solves as before E_G existed).
@@ -143,6 +151,7 @@ struct SolverOptions {
     visit("pca_deviation", &SolverOptions::pca_deviation);
     visit("motion", &SolverOptions::motion);
     visit("ground", &SolverOptions::ground);
+    visit("ground_unobserved_scale", &SolverOptions::ground_unobserved_scale);
     visit("floor_height", &SolverOptions::floor_height);
     visit("accel_at_rest", &SolverOptions::accel_at_rest);
     visit("min_confidence", &SolverOptions::min_confidence);

@@ -44,6 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="bend bones beyond the clip from 1 s on (their own axis x|y|z), e.g. foot_l,foot_r:x:90")
     e.add_argument("--slip", action="append", default=[], metavar="SENSOR:AT_S:AXIS:DEG",
                    help="a sensor slips on its segment at AT_S (its own axis), e.g. forearm_l:4:z:60")
+    e.add_argument("--cameras-lost-at", type=float, default=None, metavar="S",
+                   help="every camera stops detecting S seconds into the take (IMUs only from then on); "
+                        "the JSON gets the joints' error 0.5, 1, 2 and 4 s later")
     e.add_argument("--json", help="JSON file to write the results to")
     e.add_argument("--table", choices=["paper", "heading"],
                    help="paper: regenerate the paper's tables and plots on the test clips; heading: print the "
@@ -70,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     bends, slips = tuple(map(extremes.Bend.parse, args.bend)), tuple(map(extremes.Slip.parse, args.slip))
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"),
-                         bends=bends, slips=slips)
+                         bends=bends, slips=slips, cameras_lost_at_s=args.cameras_lost_at)
     cal_options = {} if args.site_std is None else {"site_std": args.site_std / 1000.0}
     results = [simulated.evaluate(clip, config, args.omit, args.seed, args.set, args.baseline, args.calibration,
                                   cal_options)
@@ -79,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
     Path(args.json).write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: v for k, v in summary.items() if not isinstance(v, (list, dict))}), flush=True)
     for r in results:
-        told = {k: r[k] for k in ("extremes", "distrusted", "upside_down_frames") if r.get(k)}
+        told = {k: r[k] for k in ("extremes", "distrusted", "upside_down_frames", "cameras_lost") if r.get(k)}
         if told:
             print(json.dumps({"clip": r["clip"], **told}), flush=True)
     return 0

@@ -99,6 +99,8 @@ def evaluate(clip, config: sim_take.Config, omit: list[str], seed: int, settings
                    "calibration": "estimated" if estimated else t.calibration, "floor_cm": floor_cm(t)})
     if baseline is None:
         result["distrusted"] = distrust_spans(t.times, left_out)
+    if config.cameras_lost_at_s is not None:
+        result["cameras_lost"] = drift(t, solved, config.cameras_lost_at_s, estimated.skeleton if estimated else None)
     if config.bends or config.slips:
         result["extremes"] = extreme_errors(t, solved, estimated.skeleton if estimated else t.skeleton, config)
     if estimated:
@@ -123,6 +125,25 @@ def extreme_errors(t: sim_take.Take, solved: np.ndarray, solved_skeleton: _core.
         after = times >= from_s
         e = np.degrees(rotations.angle_between(ours[after, j], truth[after, j])) if after.any() else np.array([np.nan])
         out[label] = {"mean_deg": float(e.mean()), "max_deg": float(e.max())}
+    return out
+
+
+DRIFT_AFTER_S = (0.5, 1.0, 2.0, 4.0)
+
+
+def drift(t: sim_take.Take, solved: np.ndarray, lost_at_s: float, solved_skeleton=None) -> dict:
+    """Mean joint-centre error (cm) at each of DRIFT_AFTER_S seconds after the cameras were
+    lost (null past the take's end)."""
+    times = t.times - t.times[0]
+    ours_skeleton = solved_skeleton or t.skeleton
+    out = {}
+    for after in DRIFT_AFTER_S:
+        f = int(np.searchsorted(times, lost_at_s + after))
+        if f >= len(times):
+            out[f"{after:g}s"] = None
+            continue
+        ours, truth = ours_skeleton.forward_kinematics(solved[f])[1], t.skeleton.forward_kinematics(t.thetas[f])[1]
+        out[f"{after:g}s"] = float(np.linalg.norm(ours - truth, axis=1).mean() * 100)
     return out
 
 

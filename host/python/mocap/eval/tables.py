@@ -55,6 +55,9 @@ def _run(clips, config, omit=(), baseline=None, seed=0, settings=()) -> dict:
     return evaluation.summarise(results)
 
 
+CAMERAS_LOST_AT_S = 2.0  # IMUs only from then on, after 8 cameras
+
+
 def compute(seed: int = 0) -> dict:
     clips = test_clips()
     out = {"seed": seed, "clips": [c.relative_to(paths.shared_file("data/mocap")).as_posix() for c in clips]}
@@ -69,6 +72,7 @@ def compute(seed: int = 0) -> dict:
         out["ablations"][imus] = {name: _run(clips, take.Config(preset=imus), omit, seed=seed) for name, omit in ABLATIONS}
         out["ablations"][imus]["full"] = full
     out["cameras"] = {n: _run(clips, take.Config(preset="hq13", cameras=n), seed=seed) for n in range(1, 9)}
+    out["cameras_lost"] = _run(clips, take.Config(preset="hq13", cameras_lost_at_s=CAMERAS_LOST_AT_S), seed=seed)
     out["subsampling"] = {f"{b} of {p}": _run(clips, take.Config(preset="hq13", detect_every=(p, b)), seed=seed)
                           for p, b in SUBSAMPLING}
     out["site_offsets_off"] = {m or "fused": _run(clips, dataclasses.replace(
@@ -138,11 +142,32 @@ def _cameras_and_subsampling(r: dict) -> list[str]:
              "the keypoints there rather than dead-reckoning the body 0.8-6 m away as it did (the prediction shift, "
              "host/README.md, \"The per-frame solve\"). Without the detector's systematic keypoint offsets "
              "(`--site-offsets off`) one camera scores 5.0 cm.",
-             "", "## Detection subsampling (13 IMU, 8 cameras)", "",
+             ""] + _cameras_lost(r) + ["", "## Detection subsampling (13 IMU, 8 cameras)", "",
              "| detections on | position (cm) | orientation (deg) | velocity (cm/s) |", "|---|---|---|---|"]
     for name, s in r["subsampling"].items():
         lines.append(f"| {name} frames | {s['pos_error_cm']:.1f} | {s['ori_error_deg']:.1f} | {s['vel_error_cms']:.1f} |")
     return lines
+
+
+def _cameras_lost(r: dict) -> list[str]:
+    clips = r["cameras_lost"]["results"]
+    cells, worst = [], []
+    for after in evaluation.DRIFT_AFTER_S:
+        e = [c["cameras_lost"][f"{after:g}s"] for c in clips if c["cameras_lost"][f"{after:g}s"] is not None]
+        cells.append(f"{np.mean(e):.1f} ({len(e)})" if e else "-")
+        worst.append(f"{max(e):.1f}" if e else "-")
+    return [f"## Cameras lost (13 IMU, HQ: 8 cameras for {CAMERAS_LOST_AT_S:g} s, then IMUs only)", "",
+            "| after the loss | " + " | ".join(f"{a:g} s" for a in evaluation.DRIFT_AFTER_S) + " |",
+            "|---|" + "---|" * len(evaluation.DRIFT_AFTER_S),
+            "| joint centres (cm), mean over the clips that long (clips) | " + " | ".join(cells) + " |",
+            "| worst clip (cm) | " + " | ".join(worst) + " |", "",
+            "Without keypoints the root's position is dead-reckoned from the accelerometers (E_A), and every such "
+            "frame's `PoseFrame` says so (`QUALITY_POSITION_UNCONSTRAINED`). The floor (E_G, made stronger on "
+            "frames without keypoints: `ground_unobserved_gain`) holds the height; the horizontal drift is the "
+            "accelerometers' (bias, tilt error) and grows with time. When the keypoints return the pose is "
+            "re-acquired from them and the drift spread over the velocity (host/README.md). "
+            f"`mocap eval --motion CLIP --calibration oracle --cameras-lost-at {CAMERAS_LOST_AT_S:g} --json OUT` "
+            "gives one clip's figures."]
 
 
 def _tuning(r: dict) -> list[str]:

@@ -50,6 +50,7 @@ class Config:
     mount_max_deg: float = 20.0
     bends: tuple[extremes.Bend, ...] = ()  # joints bent beyond the clip (the truth includes them)
     slips: tuple[extremes.Slip, ...] = ()  # sensors that slip on their segment mid-take
+    cameras_lost_at_s: float | None = None  # every camera stops detecting from then on (IMUs only)
 
 
 @dataclasses.dataclass
@@ -119,6 +120,8 @@ def simulate_motion(skeleton: _core.Skeleton, thetas: np.ndarray, dt: float, con
     times = true_times + rng.normal(scale=config.time_jitter_s, size=len(thetas))
     times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing
     keypoints = _detections(skeleton, layout, sites, true_rig, thetas, preset, config, rng)
+    if config.cameras_lost_at_s is not None:
+        keypoints = [None if at >= config.cameras_lost_at_s else k for k, at in zip(keypoints, true_times)]
     quats, accs = imu_readings(skeleton, imus, thetas, true_times, config, rng)
     for slip in config.slips:
         quats, accs = extremes.slip(quats, accs, [s.name for s in imus], true_times, slip)
