@@ -14,6 +14,8 @@ import time
 
 import can
 
+from mocap.net.keys import ServerKeys
+
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.can_bus import open_bus
 from mocap_edge.hub.i2c import I2cError, I2cImu, open_i2c
@@ -34,14 +36,15 @@ def _stop_on_signals():
     return lambda: bool(stopping)
 
 
-def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, duration_s: float = 0.0) -> int:
+def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, duration_s: float = 0.0,
+        keys: ServerKeys | None = None) -> int:
     config = HubConfig.load(config_path)
     if config.names and not can_uri or config.i2c and not i2c_uri:
         raise EdgeError(f"{config_path} names {'CAN nodes' if config.names and not can_uri else 'I2C IMUs'}: "
                         f"give {'--can' if config.names and not can_uri else '--i2c'}")
     local = _local_imus(config, i2c_uri) if config.i2c else []
     port = open_bus(can_uri) if can_uri else None
-    publish, socket = publisher(bind)
+    publish, socket = publisher(bind, keys)
     stop = _stop_on_signals()
     service = HubService(port, Hub(config), publish, local=local,
                          reopen=(lambda: open_bus(can_uri)) if can_uri else None)

@@ -19,6 +19,7 @@ import zmq
 from mocap import paths
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
+from mocap.io.session import Session
 from mocap.net import transport, wire
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
@@ -136,7 +137,8 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     edge = [subprocess.Popen(cmd) for cmd in commands]
     edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
     recording = subprocess.Popen(_recorder_command(studio, record, duration)) if record else None
-    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]])
+    keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
+    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:
         poses, healths = _collect(host, sub, progress, on_pose)
         lines = host.stdout.read().strip().splitlines()

@@ -1,0 +1,181 @@
+"""CURVE keys: `mocap keys` writes a key pair the readers take back; a bad key file or a malformed
+key in a session is refused with an error that names it; over ZeroMQ a subscriber hears only the
+publisher holding the key it expects, and a publisher admitting listed clients refuses the others."""
+
+import dataclasses
+import json
+import os
+import re
+import stat
+import subprocess
+import sys
+import time
+
+import pytest
+import zmq
+
+from mocap import _core, paths
+from mocap.errors import InputError
+from mocap.io.session import CurveSettings, Session
+from mocap.model import studio
+from mocap.model.solver import imu_set_json
+from mocap.net import keys, transport
+
+
+@pytest.fixture
+def session(tmp_path) -> Session:
+    """A session mocapd loads (an 8-camera ring, the 13-IMU set), its files beside it."""
+    (tmp_path / "rig.json").write_text(studio.ring_rig(8).to_json())
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    imus = _core.load_imu_sites(str(paths.IMU_SETS["13"]), skeleton)
+    (tmp_path / "imus.json").write_text(json.dumps(imu_set_json(skeleton, imus)))
+    return Session(str(paths.DEFAULT_SKELETON), "rig.json", str(paths.LAYOUTS / "coco17.json"), "imus.json",
+                   ["tcp://127.0.0.1:5600"], "tcp://127.0.0.1:5700", base=tmp_path)
+
+
+def _pair(tmp_path, name):
+    keys.make_keypair(tmp_path, name)
+    return keys.read_secret(tmp_path / f"{name}.key")
+
+
+def test_mocap_keys_writes_a_private_secret_and_its_public_key(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "mocap.cli", "keys", "--out", str(tmp_path / "k"), "--name", "cam_01"],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    made = json.loads(out.stdout)
+    secret, public = tmp_path / "k" / "cam_01.key", tmp_path / "k" / "cam_01.pub"
+    assert made["secret"] == str(secret) and made["public_key"] == public.read_text().strip()
+    assert stat.S_IMODE(secret.stat().st_mode) == 0o600
+    pair = keys.read_secret(secret)
+    assert pair.public == made["public_key"] and keys.is_key(pair.secret) and pair.secret != pair.public
+    again = subprocess.run([sys.executable, "-m", "mocap.cli", "keys", "--out", str(tmp_path / "k"), "--name", "cam_01"],
+                           capture_output=True, text=True, timeout=60)
+    assert again.returncode != 0 and "exists" in again.stderr  # a device's key is never replaced by accident
+    assert keys.read_secret(secret) == pair
+
+
+def test_a_bad_secret_key_file_is_refused_with_what_is_wrong(tmp_path):
+    pair = _pair(tmp_path, "host")
+    opened = tmp_path / "open.key"
+    opened.write_text(pair.secret)
+    os.chmod(opened, 0o644)
+    with pytest.raises(keys.KeyFileError, match=r"readable by others \(mode 0644\): chmod 600"):
+        keys.read_secret(opened)
+    for name, text in (("short.key", pair.secret[:39]), ("quote.key", '"' + pair.secret[1:]), ("bin.key", "\xff" * 40)):
+        path = tmp_path / name
+        path.write_text(text)
+        os.chmod(path, 0o600)
+        with pytest.raises(keys.KeyFileError, match="is not a secret key"):
+            keys.read_secret(path)
+    with pytest.raises(keys.KeyFileError, match="cannot read secret key"):
+        keys.read_secret(tmp_path / "none.key")
+    assert keys.read_public(pair.public) == pair.public
+    assert keys.read_public(str(tmp_path / "host.pub")) == pair.public
+    with pytest.raises(keys.KeyFileError, match="neither a public key"):
+        keys.read_public("nonsense")
+
+
+def _keyed(session, tmp_path):
+    host, box = _pair(tmp_path, "host"), _pair(tmp_path, "box")
+    return dataclasses.replace(session, curve=CurveSettings("host.key", {session.inputs[0]: box.public})), host, box
+
+
+def test_the_session_reads_its_keys_and_mocapd_reads_the_same(session, tmp_path):
+    keyed, host, box = _keyed(session, tmp_path)
+    path = keyed.save(tmp_path / "session.json")
+    loaded = Session.load(path)
+    assert loaded.curve == keyed.curve
+    client = loaded.client_keys()
+    assert client.pair == host and client.server(session.inputs[0]) == box.public
+    assert client.server("tcp://127.0.0.1:5700") == host.public  # mocapd's output: the host's key
+    _core.HostPipeline.load(str(path))  # mocapd's own reader takes it
+
+
+@pytest.mark.parametrize("curve, message", [
+    ({"host_key": "host.key", "inputs": {"tcp://127.0.0.1:5600": "x" * 39}}, "key of 'tcp://127.0.0.1:5600'"),
+    ({"host_key": "host.key", "inputs": {"tcp://127.0.0.1:5600": "~" * 40}}, "key of 'tcp://127.0.0.1:5600'"),
+    ({"host_key": "host.key", "inputs": {}}, "no key for input 'tcp://127.0.0.1:5600'"),
+    ({"host_key": "host.key", "inputs": {"tcp://127.0.0.1:5600": "BOX", "tcp://box:1": "BOX"}},
+     "'tcp://box:1', which is not an input"),
+    ({"inputs": {"tcp://127.0.0.1:5600": "BOX"}}, "host_key"),
+    ({"host_key": "host.key", "inputs": {"tcp://127.0.0.1:5600": "BOX"}, "subscribers": ["short"]},
+     'subscriber "short" is not a public key'),
+    ({"host_key": "host.key", "inputs": {"tcp://127.0.0.1:5600": "BOX"}, "server_key": "BOX"},
+     "unknown curve key 'server_key'"),
+])
+def test_malformed_keys_are_refused_by_both_readers(session, tmp_path, curve, message):
+    _, _, box = _keyed(session, tmp_path)
+    data = session.to_json() | {"curve": json.loads(json.dumps(curve).replace('"BOX"', json.dumps(box.public)))}
+    with pytest.raises(InputError, match=re.escape(message)):
+        Session.from_json(data, tmp_path)
+    (tmp_path / "bad.json").write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=re.escape(message)):
+        _core.HostPipeline.load(str(tmp_path / "bad.json"))
+
+
+def test_a_host_key_others_can_read_is_refused_by_both_readers(session, tmp_path):
+    keyed, _, _ = _keyed(session, tmp_path)
+    os.chmod(tmp_path / "host.key", 0o640)
+    path = keyed.save(tmp_path / "session.json")
+    with pytest.raises(InputError, match="readable by others"):
+        Session.load(path).client_keys()
+    with pytest.raises(ValueError, match="readable by others"):
+        _core.HostPipeline.load(str(path))
+
+
+def _received(sub, pub, n=10, polls=400):
+    got = 0
+    for _ in range(polls):
+        pub.send(b"x")
+        if sub.poll(5):
+            while True:
+                try:
+                    sub.recv(zmq.NOBLOCK)
+                    got += 1
+                except zmq.Again:
+                    break
+        if got >= n:
+            break
+    return got
+
+
+def test_a_subscriber_hears_only_the_publisher_holding_the_key_it_expects(tmp_path):
+    host, box, stranger = _pair(tmp_path, "host"), _pair(tmp_path, "box"), _pair(tmp_path, "stranger")
+    context = zmq.Context()
+    endpoints = [f"tcp://127.0.0.1:{p}" for p in (_free(), _free())]
+    # Two publishers of different keys on one socket: each connection takes its own server key.
+    right = transport.publisher(context, endpoints[0], keys=keys.ServerKeys(box))
+    wrong = transport.publisher(context, endpoints[1], keys=keys.ServerKeys(stranger))
+    client = keys.ClientKeys(host, {endpoints[0]: box.public, endpoints[1]: box.public})
+    sub = transport.subscriber(context, endpoints, keys=client)
+    assert _received(sub, right) >= 10
+    assert _received(sub, wrong, n=1, polls=100) == 0
+    with pytest.raises(keys.KeyFileError, match="no key for tcp://127.0.0.1:1"):
+        transport.subscriber(context, ["tcp://127.0.0.1:1"], keys=keys.ClientKeys(host, {}))
+    for s in (sub, right, wrong):
+        s.close(linger=0)
+    context.term()
+
+
+def test_a_box_admitting_the_host_refuses_other_subscribers_and_counts_them(tmp_path):
+    host, box, other = _pair(tmp_path, "host"), _pair(tmp_path, "box"), _pair(tmp_path, "other")
+    context = zmq.Context()
+    endpoint = f"tcp://127.0.0.1:{_free()}"
+    pub = transport.publisher(context, endpoint, keys=keys.ServerKeys(box, frozenset([host.public])))
+    allowed = transport.subscriber(context, [endpoint], keys=keys.ClientKeys(host, {endpoint: box.public}))
+    refused = transport.subscriber(context, [endpoint], keys=keys.ClientKeys(other, {endpoint: box.public}))
+    assert _received(allowed, pub) >= 10
+    assert _received(refused, pub, n=1, polls=100) == 0
+    deadline = time.monotonic() + 5
+    while transport.refused(context) == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert transport.refused(context) >= 1
+    for s in (allowed, refused, pub):
+        s.close(linger=0)
+
+
+def _free() -> int:
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
