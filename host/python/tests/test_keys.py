@@ -9,6 +9,7 @@ import re
 import stat
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -19,7 +20,7 @@ from mocap.errors import InputError
 from mocap.io.session import CurveSettings, Session
 from mocap.model import studio
 from mocap.model.solver import imu_set_json
-from mocap.net import keys, transport
+from mocap.net import keys, transport, wire
 
 
 @pytest.fixture
@@ -179,3 +180,73 @@ def _free() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def _handshakes(socket: zmq.Socket, seconds: float, until=None) -> list[int]:
+    """The handshake events (succeeded / failed) a socket's monitor reports within seconds."""
+    from zmq.utils.monitor import recv_monitor_message
+    wanted = (zmq.EVENT_HANDSHAKE_SUCCEEDED, zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL,
+              zmq.EVENT_HANDSHAKE_FAILED_PROTOCOL, zmq.EVENT_HANDSHAKE_FAILED_AUTH)
+    monitor, events = socket.get_monitor_socket(), []
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline and not (until and until(events)):
+        if monitor.poll(50):
+            event = recv_monitor_message(monitor)["event"]
+            if event in wanted:
+                events.append(event)
+    socket.disable_monitor()
+    monitor.close(linger=0)
+    return events
+
+
+def test_the_recorder_records_the_keyed_box_and_nothing_of_a_stranger(session, tmp_path):
+    from mocap.recording import recorder
+    keyed, host, box = _keyed(session, tmp_path)
+    stranger = _pair(tmp_path, "stranger")
+    recorded = {}
+    for name, pair in (("box", box), ("stranger", stranger)):
+        endpoint = f"tcp://127.0.0.1:{_free()}"  # the session expects the box's key there
+        path = dataclasses.replace(keyed, inputs=[endpoint], curve=CurveSettings("host.key", {endpoint: box.public}))\
+            .save(tmp_path / f"{name}.json")
+        context = zmq.Context()
+        pub = transport.publisher(context, endpoint, keys=keys.ServerKeys(pair, frozenset([host.public])))
+        stop = threading.Event()
+
+        def send():
+            while not stop.is_set():
+                pub.send_multipart(wire.encode(wire.KeypointFrame(camera_id="cam0", capture_time_ns=time.time_ns())))
+                time.sleep(0.01)
+
+        sender = threading.Thread(target=send)
+        sender.start()
+        counts = recorder.record([endpoint], tmp_path / f"{name}.mcap", seconds=1.5, session=path)
+        stop.set()
+        sender.join()
+        pub.close(linger=0)
+        recorded[name] = counts.recorded.get("/camera/cam0", 0)
+    assert recorded["box"] >= 50 and recorded["stranger"] == 0, recorded
+
+
+def test_the_live_calibrator_hears_and_publishes_with_the_sessions_keys(session, tmp_path):
+    from mocap.calibration import live
+    keyed, host, box = _keyed(session, tmp_path)
+    box_ep, publish = (f"tcp://127.0.0.1:{_free()}" for _ in range(2))
+    keyed = dataclasses.replace(keyed, inputs=[box_ep, publish],
+                                curve=CurveSettings("host.key", {box_ep: box.public, publish: host.public}))
+    path = keyed.save(tmp_path / "session.json")
+    context = zmq.Context()
+    pub = transport.publisher(context, box_ep, keys=keys.ServerKeys(box, frozenset([host.public])))
+    calibrator = threading.Thread(target=live.follow, args=([box_ep], path, tmp_path / "out", publish),
+                                  kwargs={"duration_s": 4.0})
+    calibrator.start()
+    # The box admits the calibrator (it holds the host's key)...
+    assert zmq.EVENT_HANDSHAKE_SUCCEEDED in _handshakes(pub, 3.0, until=lambda e: e)
+    # ...and the calibrator serves the host's key: mocapd's expectation on its endpoint.
+    client = keys.ClientKeys(host, {publish: host.public})
+    reader = transport.subscriber(context, [publish], keys=client)
+    assert _handshakes(reader, 3.0, until=lambda e: e) == [zmq.EVENT_HANDSHAKE_SUCCEEDED]
+    stranger_view = transport.subscriber(context, [publish], keys=keys.ClientKeys(host, {publish: box.public}))
+    assert zmq.EVENT_HANDSHAKE_FAILED_NO_DETAIL in _handshakes(stranger_view, 3.0, until=lambda e: e)
+    calibrator.join(timeout=30)
+    for s in (pub, reader, stranger_view):
+        s.close(linger=0)

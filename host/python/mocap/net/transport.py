@@ -8,7 +8,9 @@ growing without bound; a SUB socket likewise drops what it cannot hold.
 With CURVE keys (`mocap.net.keys`) a publisher is a CURVE server holding its key pair, and
 a subscriber a CURVE client that expects each endpoint's server key: the streams are then
 authenticated and encrypted. A server given the clients it admits checks each client's key
-in a ZAP handler (one per ZeroMQ context), and counts the refused ones (`refused`).
+in a ZAP handler, and counts the refused ones (`refused`). ZeroMQ has one ZAP handler per
+context: it admits the keys of every publisher of that context (a box has one publisher), and
+once started it checks the clients of every CURVE publisher of the context.
 """
 
 from __future__ import annotations
