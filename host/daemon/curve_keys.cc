@@ -30,8 +30,8 @@ bool ReadHostKey(const nlohmann::json& j, const std::string& base, CurveKeys* ou
   return ReadSecretKeyFile(path, &out->host_public, &out->host_secret, error);
 }
 
-bool ReadInputKeys(const nlohmann::json& j, const std::vector<std::string>& inputs,
-                   CurveKeys* out, std::string* error) {
+bool ReadInputKeys(const nlohmann::json& j, const std::vector<std::string>& inputs, CurveKeys* out,
+                   std::string* error) {
   if (!j.contains("inputs") || !j.at("inputs").is_object())
     return *error = "curve: inputs (endpoint -> public key) is missing", false;
   for (const auto& [endpoint, key] : j.at("inputs").items()) {

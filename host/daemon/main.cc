@@ -57,6 +57,17 @@ void PrintCounts(const char* name, const std::map<std::string, uint64_t>& counts
   std::cout << "}";
 }
 
+void PrintSummary(const mocap::DaemonSummary& summary, bool realtime) {
+  std::cout << "{\"frames\": " << summary.frames
+            << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
+            << ", \"latency_p99_ms\": " << Percentile(summary.latency_ms, 0.99)
+            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0)
+            << ", \"subscribers_refused\": " << summary.subscribers_refused;
+  PrintCounts("dropped", summary.dropped);
+  PrintCounts("refused", summary.refused);
+  std::cout << ", \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -111,13 +122,6 @@ int main(int argc, char** argv) {
   if (!mocap::RunDaemon(pipeline.get(), options, &g_stop, &summary, &error)) {
     return std::cerr << "mocapd: " << error << "\n", 1;
   }
-  std::cout << "{\"frames\": " << summary.frames
-            << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
-            << ", \"latency_p99_ms\": " << Percentile(summary.latency_ms, 0.99)
-            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0)
-            << ", \"subscribers_refused\": " << summary.subscribers_refused;
-  PrintCounts("dropped", summary.dropped);
-  PrintCounts("refused", summary.refused);
-  std::cout << ", \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
+  PrintSummary(summary, realtime);
   return 0;
 }

@@ -13,8 +13,8 @@ namespace {
 using nlohmann::json;
 
 // The keys of the session object itself.
-constexpr const char* kSessionKeys[] = {"format",         "skeleton", "rig",    "layout", "imus",
-                                        "prior",          "inputs",   "output", "sync",   "solver",
+constexpr const char* kSessionKeys[] = {"format",          "skeleton", "rig",    "layout", "imus",
+                                        "prior",           "inputs",   "output", "sync",   "solver",
                                         "imus_calibrated", "curve"};
 
 bool CheckSessionKeys(const json& j, std::string* error) {

@@ -16,8 +16,8 @@
 // the IMU set's mountings and headings are not known yet: the IMUs are synchronised but not solved
 // with until a Calibration message (proto/mocap/v1/calibration.proto) brings them. Camera ids on
 // the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
-// keys keep the defaults; an unknown key anywhere is an error naming it. "curve" (optional) holds the
-// streams' keys (curve_keys.h); without it the streams are neither authenticated nor encrypted.
+// keys keep the defaults; an unknown key anywhere is an error naming it. "curve" (optional) holds
+// the streams' keys (curve_keys.h); without it the streams are neither authenticated nor encrypted.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 

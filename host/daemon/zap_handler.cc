@@ -34,10 +34,12 @@ void ZapHandler::Handle() {
     }
     (ok ? accepted_ : refused_)++;
     const std::string id = request.size() > 1 ? request[1].to_string() : "";
-    std::vector<zmq::const_buffer> reply = {
-        zmq::str_buffer("1.0"), zmq::buffer(id),         zmq::buffer(ok ? "200" : "400", 3),
-        zmq::buffer(ok ? "OK" : "key not allowed", ok ? 2 : 15),
-        zmq::str_buffer(""),    zmq::str_buffer("")};
+    std::vector<zmq::const_buffer> reply = {zmq::str_buffer("1.0"),
+                                            zmq::buffer(id),
+                                            zmq::buffer(ok ? "200" : "400", 3),
+                                            zmq::buffer(ok ? "OK" : "key not allowed", ok ? 2 : 15),
+                                            zmq::str_buffer(""),
+                                            zmq::str_buffer("")};
     zmq::send_multipart(socket_, reply);
   }
 }
