@@ -132,3 +132,20 @@ def test_inputs_off_this_machine_need_keys_or_insecure(tmp_path):
     allowed = subprocess.run([str(play.MOCAPD), str(path), "--duration", "0.2", "--insecure", "--quiet"],
                              capture_output=True, text=True, timeout=30)
     assert allowed.returncode == 0 and f"WARNING: --insecure: input {box}" in allowed.stderr
+
+
+def test_the_simulated_studio_with_keys_is_solved_and_recorded_as_without(tmp_path):
+    from mocap.demo import score, studio as live_studio
+    from mocap.recording import reader
+
+    keyed = live_studio.prepare(tmp_path / "studio", seconds=3.0, seed=4, curve=True)
+    assert Session.load(keyed.session).curve is not None
+    run = play.play(keyed, record=tmp_path / "take.mcap")
+    result = score.score(keyed, run)
+    assert result["dropped"] == 0 and len(run.poses) == 180, result  # every frame of 3 s at 60 fps
+    links = [s for s in run.healths[-1].streams if s.stream.startswith("link/")]
+    assert len(links) == 9 and all(s.active and s.handshake_failures == 0 for s in links), links
+    assert sum(run.host_summary["refused"].values()) == 0
+    with reader.Recording(tmp_path / "take.mcap") as recording:  # the recorder heard every box and mocapd
+        topics = {m.topic for m in recording.messages()}
+    assert {*(f"/camera/{c}" for c in keyed.camera_ids), "/imu/hub0", "/pose"} <= topics, topics

@@ -39,7 +39,14 @@ def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple |
         cmd += ["--hs", *map(str, studio.detect_every)]
     if unplugged and unplugged[0] == camera:
         cmd += ["--stop", *map(str, unplugged[1:])]
-    return cmd
+    return cmd + _box_keys(studio, camera)
+
+
+def _box_keys(studio: Studio, device: str) -> list[str]:
+    """A box's key options in a studio with keys: its secret key, and the host admitted."""
+    if studio.keys is None:
+        return []
+    return ["--curve-secret", str(studio.keys / f"{device}.key"), "--curve-allow", str(studio.keys / "host.pub")]
 
 
 def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
@@ -58,7 +65,7 @@ def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> li
         raise InputError(f"the simulated sensor nodes did not start (status {nodes.wait()}; their log is above)")
     hub = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can",
                             f"socketcand:127.0.0.1:{listening[1]}:can0", "--config", str(studio.hub_config),
-                            "--bind", studio.endpoints["hub0"]])
+                            "--bind", studio.endpoints["hub0"], *_box_keys(studio, "hub0")])
     return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
