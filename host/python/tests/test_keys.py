@@ -250,3 +250,30 @@ def test_the_live_calibrator_hears_and_publishes_with_the_sessions_keys(session,
     calibrator.join(timeout=30)
     for s in (pub, reader, stranger_view):
         s.close(linger=0)
+
+
+def test_a_keyed_replay_is_read_only_by_a_subscriber_expecting_its_key(tmp_path):
+    from mocap.recording import recorder, replay
+    with recorder.Recorder(tmp_path / "take.mcap") as r:
+        for i in range(50):
+            r.write(wire.encode(wire.KeypointFrame(camera_id="cam0", frame_index=i, capture_time_ns=i)), i)
+    pair, host, other = _pair(tmp_path, "replay"), _pair(tmp_path, "host"), _pair(tmp_path, "other")
+    endpoint = f"tcp://127.0.0.1:{_free()}"
+    context = zmq.Context()
+    right = transport.subscriber(context, [endpoint], keys=keys.ClientKeys(host, {endpoint: pair.public}))
+    wrong = transport.subscriber(context, [endpoint], keys=keys.ClientKeys(host, {endpoint: other.public}))
+    sent = []
+    player = threading.Thread(target=lambda: sent.append(replay.replay(
+        tmp_path / "take.mcap", endpoint, speed=None, wait_for_subscribers=5.0, keys=keys.ServerKeys(pair))))
+    player.start()
+    got = {"right": [], "wrong": []}
+    deadline = time.monotonic() + 10
+    while len(got["right"]) < 50 and time.monotonic() < deadline:
+        for name, sub in (("right", right), ("wrong", wrong)):
+            if sub.poll(10):
+                got[name].append(wire.decode(sub.recv_multipart()).frame_index)
+    player.join(timeout=30)
+    assert sent == [50] and got["right"] == list(range(50)) and got["wrong"] == []
+    for s in (right, wrong):
+        s.close(linger=0)
+    context.term()
