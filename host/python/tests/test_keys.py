@@ -277,3 +277,28 @@ def test_a_keyed_replay_is_read_only_by_a_subscriber_expecting_its_key(tmp_path)
     for s in (right, wrong):
         s.close(linger=0)
     context.term()
+
+
+def test_a_calibrated_session_keeps_the_keys_and_a_recording_carries_none(session, tmp_path):
+    from mocap.calibration.from_messages import Estimated, write_session
+    from mocap.model.solver import layout_json
+    from mocap.recording import reader, recorder
+    keyed, host, box = _keyed(session, tmp_path)
+    source = keyed.save(tmp_path / "session.json")
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / "coco17.json"), skeleton)
+    imus = _core.load_imu_sites(str(paths.IMU_SETS["6"]), skeleton)
+    estimated = Estimated(skeleton.to_json(), json.dumps(imu_set_json(skeleton, imus)),
+                          json.dumps(layout_json(skeleton, layout)), {"frames": 1})
+    write_session(tmp_path / "calibrated" / "here", source, estimated, {"frames": 1})
+    calibrated = tmp_path / "calibrated" / "here" / "session.json"
+    assert Session.load(calibrated).curve.host_key == "../../host.key"  # the one key file, not a copy
+    assert Session.load(calibrated).client_keys().pair == host
+    _core.HostPipeline.load(str(calibrated))  # mocapd reads the key from the new folder
+    with recorder.Recorder(tmp_path / "take.mcap") as r:
+        r.attach_session(source)
+    (tmp_path / "attached").mkdir()
+    attached = reader.read_session(tmp_path / "take.mcap", tmp_path / "attached")
+    assert Session.load(attached).curve is None and "curve" not in attached.read_text()
+    assert not list((tmp_path / "attached").glob("*.key"))
+    _core.HostPipeline.load(str(attached))  # a recording is solved offline without keys

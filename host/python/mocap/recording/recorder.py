@@ -145,7 +145,9 @@ class Recorder:
 
     def attach_session(self, session: str | Path) -> None:
         """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
-        prior), so that the recording can be solved without them (reader.read_session)."""
+        prior), so that the recording can be solved without them (reader.read_session). Its
+        "curve" keys are left out: they are the live streams', and the host's secret key file
+        is never copied into a recording."""
         config = Session.load(session)
         renamed = {}
         for key in FILES:
@@ -153,7 +155,7 @@ class Recorder:
             if source is not None:
                 self._attach(f"session/{key}.json", source.read_bytes())
                 renamed[key] = f"{key}.json"
-        self._attach("session/session.json", dataclasses.replace(config, **renamed).dumps().encode())
+        self._attach("session/session.json", dataclasses.replace(config, curve=None, **renamed).dumps().encode())
         self._file.flush()
 
     def _attach(self, name: str, data: bytes) -> None:
