@@ -10,6 +10,7 @@ the machine is refused unless --insecure."""
 
 import dataclasses
 import json
+import re
 import subprocess
 import sys
 import threading
@@ -82,6 +83,9 @@ def test_a_stranger_is_refused_and_counted_while_the_real_box_is_heard(tmp_path)
                             "--camera", "cam1", "--bind", box_ep, "--realtime", "--start-ns",
                             str(time.time_ns() + 4_000_000_000), "--curve-secret", str(tmp_path / "keys/cam1.key"),
                             "--curve-allow", str(tmp_path / "keys/host.pub")], stderr=subprocess.PIPE, text=True)
+    # A reader with a key the box does not admit, though it knows the box's public key.
+    other = keys.KeyPair(*(k.decode() for k in zmq.curve_keypair()))
+    snoop = transport.subscriber(zmq.Context.instance(), [box_ep], keys=keys.ClientKeys(other, {box_ep: pair["cam1"].public}))
     try:
         healths = _healths(output, Session.load(path).client_keys(), host)
         out, err = host.communicate(timeout=30)
@@ -89,12 +93,16 @@ def test_a_stranger_is_refused_and_counted_while_the_real_box_is_heard(tmp_path)
         stop.set()
         stranger.join(timeout=10)
         box.wait(timeout=30)
+        snooped = snoop.poll(0)
+        snoop.close(linger=0)
     assert host.returncode == 0, err[-2000:]
     assert "streams authenticated and encrypted (CURVE)" in err
     summary = json.loads(out.strip().splitlines()[-1])
     assert summary["refused"][stranger_ep] >= 2 and summary["refused"][box_ep] == 0, summary
     assert f"refused a publisher on {stranger_ep}" in err
-    assert box.returncode == 0 and "cam1: 60 frames sent" in box.stderr.read()
+    assert box.returncode == 0 and "cam1: 60 frames sent" in (box_log := box.stderr.read())
+    # The box served mocapd (the host's key admitted) and refused the other reader, which got nothing.
+    assert re.search(r"; [1-9]\d* subscribers refused", box_log) and not snooped, box_log
     assert len(healths) >= 10  # the output was read with the host's keys
     streams = {s.stream: s for s in healths[-1].streams}
     assert streams["camera/cam0"].received == 0  # none of the stranger's frames reached the host

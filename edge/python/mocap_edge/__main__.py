@@ -18,7 +18,9 @@ import math
 import sys
 import time
 
-from mocap.net import keys
+import zmq
+
+from mocap.net import keys, transport
 from mocap.net.keys import ServerKeys
 
 from mocap_edge import camera_box, pacing
@@ -72,6 +74,11 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _refused(a: argparse.Namespace) -> str:
+    """The exit line's count of subscribers the box refused (with --curve-allow)."""
+    return f"; {transport.refused(zmq.Context.instance())} subscribers refused" if a.curve_allow else ""
+
+
 def _keys(a: argparse.Namespace) -> ServerKeys | None:
     """The box's CURVE identity from --curve-secret / --curve-allow (None without them)."""
     if a.curve_secret is None:
@@ -111,8 +118,8 @@ def _camera(a: argparse.Namespace) -> int:
     counts = camera_box.BoxCounts()
     for span in _spans(a):
         counts += _run_box(a, span)
-    print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people",
-          file=sys.stderr)
+    print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people"
+          + _refused(a), file=sys.stderr)
     return 0
 
 

@@ -13,7 +13,9 @@ import sys
 import time
 
 import can
+import zmq
 
+from mocap.net import transport
 from mocap.net.keys import ServerKeys
 
 from mocap_edge.errors import EdgeError
@@ -57,7 +59,9 @@ def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, d
         socket.close()
     i2c = {imu.name: dataclasses.asdict(imu.counts) for imu in local}
     print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "
-          f"bus errors {dict(service.bus_errors.counts)}" + (f"; i2c {i2c}" if i2c else ""), file=sys.stderr)
+          f"bus errors {dict(service.bus_errors.counts)}" + (f"; i2c {i2c}" if i2c else "")
+          + (f"; {transport.refused(zmq.Context.instance())} subscribers refused" if keys and keys.allowed else ""),
+          file=sys.stderr)
     return 0
 
 
