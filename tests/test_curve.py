@@ -4,7 +4,7 @@ mocapd with a session that lists CURVE keys: a stranger publishing on an input's
 key the session does not expect is refused — none of its frames reaches the host — and counted in
 Health ("link/<endpoint>", handshake_failures) and in mocapd's exit line, while the real camera
 box (`python -m mocap_edge camera`, its secret key and the host's key admitted) on another input
-is heard; mocapd's output is read with the host's keys. A session without keys whose inputs leave
+is heard; mocapd's output is read with the host's key, by the admitted subscribers only. A session without keys whose inputs leave
 the machine is refused unless --insecure."""
 # Every endpoint here is on loopback: nothing leaves this machine.
 
@@ -113,19 +113,32 @@ def test_a_stranger_is_refused_and_counted_while_the_real_box_is_heard(tmp_path)
     assert streams[f"link/{box_ep}"].handshake_failures == 0
 
 
-def test_a_subscriber_expecting_another_key_than_the_hosts_reads_nothing(tmp_path):
+def test_mocapds_output_is_read_with_the_hosts_key_by_the_admitted_subscribers_only(tmp_path):
     keys.make_keypair(tmp_path / "keys", "host")
     host_pair = keys.read_secret(tmp_path / "keys" / "host.key")
-    other = keys.KeyPair(*(k.decode() for k in zmq.curve_keypair()))
+    admitted, other = (keys.KeyPair(*(k.decode() for k in zmq.curve_keypair())) for _ in range(2))
     box_ep, output = (f"tcp://127.0.0.1:{p}" for p in free_ports(2))
-    session = dataclasses.replace(_session(tmp_path, [box_ep], output),
-                                  curve=CurveSettings("keys/host.key", {box_ep: other.public}))
-    host = subprocess.Popen([str(play.MOCAPD), str(session.save(tmp_path / "s.json")), "--duration", "3",
+    session = dataclasses.replace(_session(tmp_path, [box_ep], output), curve=CurveSettings(
+        "keys/host.key", {box_ep: other.public}, subscribers=[admitted.public]))
+    host = subprocess.Popen([str(play.MOCAPD), str(session.save(tmp_path / "s.json")), "--duration", "4",
                              "--health-period", "0.2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    # Expecting another server key on mocapd's output: the handshake fails, no Health is read.
-    wrong = _healths(output, keys.ClientKeys(host_pair, {}, default=other.public), host)
-    host.communicate(timeout=30)
-    assert host.returncode == 0 and wrong == []
+    got = {}
+
+    def read(name, client):
+        got[name] = _healths(output, client, host)
+
+    readers = [threading.Thread(target=read, args=args) for args in (
+        ("admitted", keys.ClientKeys(admitted, {}, default=host_pair.public)),
+        ("not admitted", keys.ClientKeys(other, {}, default=host_pair.public)),
+        ("wrong server key", keys.ClientKeys(admitted, {}, default=other.public)))]
+    for r in readers:
+        r.start()
+    out, _ = host.communicate(timeout=30)
+    for r in readers:
+        r.join(timeout=10)
+    assert host.returncode == 0 and len(got["admitted"]) >= 5, got
+    assert got["not admitted"] == [] and got["wrong server key"] == []
+    assert json.loads(out.decode().strip().splitlines()[-1])["subscribers_refused"] >= 1
 
 
 def test_inputs_off_this_machine_need_keys_or_insecure(tmp_path):

@@ -115,7 +115,11 @@ bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::
   if (session.curve && session.curve->restrict_subscribers) {
     std::vector<std::string> allowed = session.curve->subscribers;
     allowed.push_back(session.curve->host_public);
-    zap = std::make_unique<ZapHandler>(context, allowed);
+    try {
+      zap = std::make_unique<ZapHandler>(context, allowed);
+    } catch (const zmq::error_t& e) {
+      return *error = std::string("output's ZAP handler: ") + e.what(), false;
+    }
   }
   InputSockets inputs(context);
   zmq::socket_t pub(context, zmq::socket_type::pub);
