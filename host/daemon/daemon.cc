@@ -5,12 +5,13 @@
 #include <zmq.hpp>
 #include <zmq_addon.hpp>
 
+#include "input_sockets.h"
 #include "wire.h"
+#include "zap_handler.h"
 
 namespace mocap {
 namespace {
 
-constexpr int kSubscriberHwm = 20000;  // messages (~3 s of 8 cameras + a hub)
 constexpr int kPublisherHwm = 2000;
 constexpr int kPollMs = 2;
 
@@ -31,41 +32,34 @@ void LogDrop(const std::string& why, const std::map<std::string, uint64_t>& drop
     std::cerr << "mocapd: dropped (" << n << " " << reason << "): " << why << "\n";
 }
 
-// Connects the subscriber to every input and binds the publisher; false with *error.
-bool OpenSockets(const Session& session, zmq::socket_t& sub, zmq::socket_t& pub,
-                 std::string* error) {
+// Binds the publisher, a CURVE server with the host's key pair when the session has keys;
+// false with *error.
+bool OpenPublisher(const Session& session, zmq::socket_t& pub, std::string* error) {
   try {
-    sub.set(zmq::sockopt::rcvhwm, kSubscriberHwm);
-    sub.set(zmq::sockopt::reconnect_ivl, 100);
-    sub.set(zmq::sockopt::reconnect_ivl_max, 2000);
-    sub.set(zmq::sockopt::linger, 0);
-    sub.set(zmq::sockopt::subscribe, "");
-    for (const std::string& endpoint : session.inputs) sub.connect(endpoint);
     pub.set(zmq::sockopt::sndhwm, kPublisherHwm);
     pub.set(zmq::sockopt::linger, 200);
+    if (session.curve) {
+      pub.set(zmq::sockopt::curve_server, true);
+      pub.set(zmq::sockopt::curve_secretkey, session.curve->host_secret);
+    }
     pub.bind(session.output);
   } catch (const zmq::error_t& e) {
-    *error = std::string("sockets: ") + e.what();
+    *error = std::string("output ") + session.output + ": " + e.what();
     return false;
   }
   return true;
 }
 
-// Feeds every message waiting on the subscriber, stamped with its arrival.
-void Drain(zmq::socket_t& sub, HostPipeline* pipeline) {
-  std::vector<zmq::message_t> parts;
-  for (;;) {
-    parts.clear();
-    if (!zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait)) return;
-    std::string why;
-    const int64_t now = NowNs();
-    const bool ok =
-        parts.size() == 2
-            ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
-            : pipeline->Reject("undecodable", std::to_string(parts.size()) + " frames, expected 2",
-                               &why);
-    if (!ok) LogDrop(why, pipeline->dropped());
-  }
+// Feeds a message as received, stamped with its arrival.
+void Deliver(std::vector<zmq::message_t>& parts, HostPipeline* pipeline) {
+  std::string why;
+  const int64_t now = NowNs();
+  const bool ok =
+      parts.size() == 2
+          ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
+          : pipeline->Reject("undecodable", std::to_string(parts.size()) + " frames, expected 2",
+                             &why);
+  if (!ok) LogDrop(why, pipeline->dropped());
 }
 
 // Solves the frames ready now and publishes them with their latency.
@@ -80,12 +74,28 @@ void PublishPoses(zmq::socket_t& pub, HostPipeline* pipeline, DaemonSummary* sum
   }
 }
 
-void PublishHealth(zmq::socket_t& pub, HostPipeline* pipeline, int64_t now, bool log) {
-  const v1::Health health = pipeline->Health(now);
+void PublishHealth(zmq::socket_t& pub, HostPipeline* pipeline, const InputSockets& inputs,
+                   int64_t now, bool log) {
+  v1::Health health = pipeline->Health(now);
+  inputs.AppendTo(&health);
   Send(pub, health);
   if (log) {
     std::cerr << "mocapd: " << health.frames_solved() << " frames, latency p50 "
               << health.latency_p50_ms() << " ms p99 " << health.latency_p99_ms() << " ms\n";
+  }
+}
+
+// Logs each input's refused handshakes as they grow (the first ones, then every 100th).
+void LogRefusals(const InputSockets& inputs, std::vector<uint64_t>* logged) {
+  logged->resize(inputs.links().size());
+  for (size_t i = 0; i < inputs.links().size(); ++i) {
+    const InputLink& link = inputs.links()[i];
+    const uint64_t n = link.handshake_failures;
+    if (n == (*logged)[i]) continue;
+    if (n <= 3 || n / 100 != (*logged)[i] / 100)
+      std::cerr << "mocapd: refused a publisher on " << link.endpoint << " (" << n
+                << " refused): not the key the session expects there\n";
+    (*logged)[i] = n;
   }
 }
 
@@ -100,30 +110,43 @@ int64_t NowNs() {
 bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::atomic<bool>* stop,
                DaemonSummary* summary, std::string* error) {
   zmq::context_t context(1);
-  zmq::socket_t sub(context, zmq::socket_type::sub), pub(context, zmq::socket_type::pub);
-  if (!OpenSockets(pipeline->session(), sub, pub, error)) return false;
+  const Session& session = pipeline->session();
+  std::unique_ptr<ZapHandler> zap;
+  if (session.curve && session.curve->restrict_subscribers) {
+    std::vector<std::string> allowed = session.curve->subscribers;
+    allowed.push_back(session.curve->host_public);
+    try {
+      zap = std::make_unique<ZapHandler>(context, allowed);
+    } catch (const zmq::error_t& e) {
+      return *error = std::string("output's ZAP handler: ") + e.what(), false;
+    }
+  }
+  InputSockets inputs(context);
+  zmq::socket_t pub(context, zmq::socket_type::pub);
+  if (!inputs.Open(session, error) || !OpenPublisher(session, pub, error)) return false;
   const int64_t start = NowNs();
   const auto period = static_cast<int64_t>(options.health_period_s * 1e9);
   int64_t next_health = start + period;
-  zmq::pollitem_t items[] = {{sub.handle(), 0, ZMQ_POLLIN, 0}};
+  std::vector<uint64_t> logged;
   while (!stop->load()) {
-    try {
-      zmq::poll(items, 1, std::chrono::milliseconds(kPollMs));
-    } catch (const zmq::error_t& e) {
-      if (e.num() == EINTR) continue;  // a signal: the loop checks *stop
-      throw;
-    }
-    Drain(sub, pipeline);
+    inputs.Poll(std::chrono::milliseconds(kPollMs));
+    if (zap) zap->Handle();
+    inputs.Drain([&](std::vector<zmq::message_t>& parts) { Deliver(parts, pipeline); });
     PublishPoses(pub, pipeline, summary);
     const int64_t now = NowNs();
+    inputs.Watch(now);
+    LogRefusals(inputs, &logged);
     if (now >= next_health) {
-      PublishHealth(pub, pipeline, now, options.log_health);
+      PublishHealth(pub, pipeline, inputs, now, options.log_health);
       next_health += period;
     }
     if (options.duration_s > 0 && now - start >= static_cast<int64_t>(options.duration_s * 1e9))
       break;
   }
   summary->dropped = pipeline->dropped();
+  for (const InputLink& link : inputs.links())
+    summary->refused[link.endpoint] = link.handshake_failures;
+  if (zap) summary->subscribers_refused = zap->refused();
   return true;
 }
 

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,8 @@ struct DaemonSummary {
   uint64_t frames = 0;
   std::vector<double> latency_ms;  // every published frame's
   std::map<std::string, uint64_t> dropped;
+  std::map<std::string, uint64_t> refused;  // per input endpoint: handshakes refused
+  uint64_t subscribers_refused = 0;         // clients refused on the output (session "subscribers")
 };
 
 // Runs until *stop or the duration. Returns false and sets *error when a socket cannot be

@@ -1,11 +1,13 @@
 // mocapd: the live host. Usage:
 //   mocapd SESSION.json [--duration S] [--health-period S] [--quiet] [--realtime PRIORITY]
-// Prints one JSON line on exit: frames, latency percentiles, drops by reason, whether it ran
-// under real-time scheduling.
+//          [--insecure]
+// Prints one JSON line on exit: frames, latency percentiles, drops by reason, refused
+// handshakes per input, whether it ran under real-time scheduling.
 #include <algorithm>
 #include <csignal>
 #include <cstring>
 #include <iostream>
+#include <map>
 #include <string>
 
 #include "daemon.h"
@@ -23,18 +25,64 @@ double Percentile(std::vector<double> v, double p) {
   return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))];
 }
 
+// A session without keys whose inputs leave this machine is refused (without --insecure):
+// anyone on the network could then publish poses' inputs into the solve. An output that leaves
+// it is only warned about (anyone could read the poses, none could change them).
+bool CheckKeys(const mocap::Session& session, bool insecure, std::string* error) {
+  if (session.curve) return true;
+  for (const std::string& endpoint : session.inputs) {
+    if (mocap::IsLocalEndpoint(endpoint)) continue;
+    if (!insecure)
+      return *error = "input " + endpoint +
+                      " is not on this machine and the session has no \"curve\" keys: anyone "
+                      "on the network could publish into the solve (README, \"Securing the "
+                      "streams\"); --insecure runs without them",
+             false;
+    std::cerr << "mocapd: WARNING: --insecure: input " << endpoint
+              << " is neither authenticated nor encrypted\n";
+  }
+  if (!mocap::IsLocalEndpoint(session.output))
+    std::cerr << "mocapd: warning: output " << session.output
+              << " is not encrypted: anyone who can reach it reads the poses\n";
+  return true;
+}
+
+void PrintCounts(const char* name, const std::map<std::string, uint64_t>& counts) {
+  std::cout << ", \"" << name << "\": {";
+  bool first = true;
+  for (const auto& [key, n] : counts) {
+    std::cout << (first ? "" : ", ") << "\"" << key << "\": " << n;
+    first = false;
+  }
+  std::cout << "}";
+}
+
+void PrintSummary(const mocap::DaemonSummary& summary, bool realtime) {
+  std::cout << "{\"frames\": " << summary.frames
+            << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
+            << ", \"latency_p99_ms\": " << Percentile(summary.latency_ms, 0.99)
+            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0)
+            << ", \"subscribers_refused\": " << summary.subscribers_refused;
+  PrintCounts("dropped", summary.dropped);
+  PrintCounts("refused", summary.refused);
+  std::cout << ", \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] "
-                 "[--realtime PRIORITY]\n"
+                 "[--realtime PRIORITY] [--insecure]\n"
                  "  --realtime PRIORITY  solve under SCHED_FIFO at PRIORITY (1-99); without the\n"
-                 "                       permission, a warning and normal scheduling\n";
+                 "                       permission, a warning and normal scheduling\n"
+                 "  --insecure           run a session without keys whose inputs are not on\n"
+                 "                       this machine (unauthenticated streams)\n";
     return argc < 2 ? 2 : 0;
   }
   mocap::DaemonOptions options;
   int realtime_priority = 0;  // 0: normal scheduling
+  bool insecure = false;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--duration" && i + 1 < argc)
@@ -43,6 +91,8 @@ int main(int argc, char** argv) {
       options.health_period_s = std::atof(argv[++i]);
     else if (a == "--quiet")
       options.log_health = false;
+    else if (a == "--insecure")
+      insecure = true;
     else if (a == "--realtime" && i + 1 < argc) {
       realtime_priority = std::atoi(argv[++i]);
       if (realtime_priority < mocap::kMinRealtimePriority ||
@@ -55,6 +105,7 @@ int main(int argc, char** argv) {
   mocap::Session session;
   if (!mocap::LoadSession(argv[1], &session, &error))
     return std::cerr << "mocapd: " << error << "\n", 1;
+  if (!CheckKeys(session, insecure, &error)) return std::cerr << "mocapd: " << error << "\n", 1;
   auto pipeline = mocap::HostPipeline::Create(std::move(session), &error);
   if (!pipeline) return std::cerr << "mocapd: " << error << "\n", 1;
   bool realtime = false;
@@ -64,21 +115,13 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, "
             << pipeline->session().imus.size() << " IMUs; publishing on "
-            << pipeline->session().output << "\n";
+            << pipeline->session().output
+            << (pipeline->session().curve ? "; streams authenticated and encrypted (CURVE)\n"
+                                          : "; streams without keys\n");
   mocap::DaemonSummary summary;
   if (!mocap::RunDaemon(pipeline.get(), options, &g_stop, &summary, &error)) {
     return std::cerr << "mocapd: " << error << "\n", 1;
   }
-  std::cout << "{\"frames\": " << summary.frames
-            << ", \"latency_p50_ms\": " << Percentile(summary.latency_ms, 0.5)
-            << ", \"latency_p99_ms\": " << Percentile(summary.latency_ms, 0.99)
-            << ", \"latency_max_ms\": " << Percentile(summary.latency_ms, 1.0)
-            << ", \"dropped\": {";
-  bool first = true;
-  for (const auto& [reason, n] : summary.dropped) {
-    std::cout << (first ? "" : ", ") << "\"" << reason << "\": " << n;
-    first = false;
-  }
-  std::cout << "}, \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
+  PrintSummary(summary, realtime);
   return 0;
 }

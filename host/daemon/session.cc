@@ -13,9 +13,9 @@ namespace {
 using nlohmann::json;
 
 // The keys of the session object itself.
-constexpr const char* kSessionKeys[] = {"format",         "skeleton", "rig",    "layout", "imus",
-                                        "prior",          "inputs",   "output", "sync",   "solver",
-                                        "imus_calibrated"};
+constexpr const char* kSessionKeys[] = {"format",          "skeleton", "rig",    "layout", "imus",
+                                        "prior",           "inputs",   "output", "sync",   "solver",
+                                        "imus_calibrated", "curve"};
 
 bool CheckSessionKeys(const json& j, std::string* error) {
   if (!j.is_object()) return *error = "a session is a JSON object", false;
@@ -64,6 +64,12 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
     if (j.contains("solver") && !ReadSolverOptions(j.at("solver"), &s.solver, error))
       throw std::runtime_error(*error);
     s.imus_calibrated = j.value("imus_calibrated", true);
+    if (j.contains("curve")) {
+      CurveKeys keys;
+      if (!ReadCurveKeys(j.at("curve"), base.string(), s.inputs, &keys, error))
+        throw std::runtime_error(*error);
+      s.curve = std::move(keys);
+    }
     *out = std::move(s);
     return true;
   } catch (const std::exception& e) {

@@ -8,14 +8,16 @@
 //             "imu_only_rate_hz": 60},
 //    "solver": {"max_iterations": 10, "velocity_gain": 0.3, "heading_time_constant": 1,
 //               "position": {"weight": 0.04, "loss": "cauchy"}, ...},
-//    "imus_calibrated": true}
+//    "imus_calibrated": true,
+//    "curve": {"host_key": "keys/host.key", "inputs": {"tcp://edge-box-1:5600": "Z85 key"}}}
 // Paths are relative to the session file. "solver" takes every field of SolverOptions by its
 // name, "sync" every field of SyncOptions but max_pending_frames, times in milliseconds
 // (options_json.h: SolverOptionKeys, SyncOptionKeys). "imus_calibrated": false (default true) says
 // the IMU set's mountings and headings are not known yet: the IMUs are synchronised but not solved
 // with until a Calibration message (proto/mocap/v1/calibration.proto) brings them. Camera ids on
 // the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
-// keys keep the defaults; an unknown key anywhere is an error naming it.
+// keys keep the defaults; an unknown key anywhere is an error naming it. "curve" (optional) holds
+// the streams' keys (curve_keys.h); without it the streams are neither authenticated nor encrypted.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -23,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "curve_keys.h"
 #include "mocap/solver.h"
 #include "mocap/stream_sync.h"
 
@@ -39,6 +42,7 @@ struct Session {
   std::vector<std::string> inputs;
   std::string output;
   bool imus_calibrated = true;
+  std::optional<CurveKeys> curve;
 };
 
 bool LoadSession(const std::string& path, Session* out, std::string* error);

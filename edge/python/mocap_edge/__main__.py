@@ -3,6 +3,8 @@
    python -m mocap_edge camera --source sim:STREAMS --camera ID --bind ENDPOINT --start-ns T [--seed S]
        [--stop FROM_S TO_S]                                            (a box of the simulated studio)
    python -m mocap_edge imu-hub [--can URI] [--i2c URI] --config hub.toml --bind ENDPOINT [--duration S]
+   camera and imu-hub take [--curve-secret FILE [--curve-allow KEY_OR_FILE...]]: the stream authenticated
+   and encrypted with the box's CURVE key (README, "Securing the streams")
                                                    (the IMU hub: sensor nodes on CAN, IMUs on its I2C)
    python -m mocap_edge sim-nodes --streams STREAMS --config hub.toml --port PORT --start-ns T
        [--stop FROM_S TO_S --stop-sensor S]        (the simulated studio's IMUs as sensor nodes, served
@@ -15,6 +17,11 @@ import contextlib
 import math
 import sys
 import time
+
+import zmq
+
+from mocap.net import keys, transport
+from mocap.net.keys import ServerKeys
 
 from mocap_edge import camera_box, pacing
 from mocap_edge.detect.base import Detector, open_detector
@@ -60,7 +67,30 @@ def parser() -> argparse.ArgumentParser:
                    "after), or sim-nodes' --stop-sensor")
     p.add_argument("--stop-sensor", help="role sim-nodes: the sensor whose node is unplugged during --stop")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated detection latency (sim: model)")
+    p.add_argument("--curve-secret", metavar="FILE", help="roles camera and imu-hub: the box's secret key file "
+                   "(`mocap keys`): publish as a CURVE server, only to subscribers that expect its public key")
+    p.add_argument("--curve-allow", nargs="+", metavar="KEY_OR_FILE", help="with --curve-secret: the subscribers "
+                   "admitted (public keys, or .pub files: the host's); without it any that knows the box's key")
     return p
+
+
+def _refused(a: argparse.Namespace) -> str:
+    """The exit line's count of subscribers the box refused (with --curve-allow)."""
+    return f"; {transport.refused(zmq.Context.instance())} subscribers refused" if a.curve_allow else ""
+
+
+def _keys(a: argparse.Namespace) -> ServerKeys | None:
+    """The box's CURVE identity from --curve-secret / --curve-allow (None without them)."""
+    if a.curve_secret is None:
+        if a.curve_allow:
+            raise EdgeError("--curve-allow needs --curve-secret")
+        return None
+    try:
+        pair = keys.read_secret(a.curve_secret)
+        allowed = frozenset(keys.read_public(k) for k in a.curve_allow) if a.curve_allow else None
+    except keys.KeyFileError as e:
+        raise EdgeError(str(e)) from None
+    return ServerKeys(pair, allowed)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -74,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"role {a.role} needs {', '.join('--' + m for m in missing)}")
     try:
         if a.role == "imu-hub":
-            return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration)
+            return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration, _keys(a))
         if a.role == "sim-nodes":
             unplugged = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
             return hub_command.sim_nodes(a.streams, a.config, a.port, a.start_ns, a.seed, unplugged)
@@ -88,8 +118,8 @@ def _camera(a: argparse.Namespace) -> int:
     counts = camera_box.BoxCounts()
     for span in _spans(a):
         counts += _run_box(a, span)
-    print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people",
-          file=sys.stderr)
+    print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people"
+          + _refused(a), file=sys.stderr)
     return 0
 
 
@@ -112,7 +142,7 @@ def _run_box(a: argparse.Namespace, span: Span | None) -> camera_box.BoxCounts:
         if a.trigger:
             pairing = TriggerPairing(stack.enter_context(_trigger(a.trigger)), source.nominal_fps)
         return camera_box.run(source, a.camera, a.bind, tuple(a.hs), pairing=pairing, realtime=a.realtime,
-                              model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000))
+                              model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000), keys=_keys(a))
 
 
 def _source_options(a: argparse.Namespace, span: Span | None) -> dict[str, object]:

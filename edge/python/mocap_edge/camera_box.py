@@ -16,6 +16,7 @@ from collections.abc import Iterable, Iterator
 import zmq
 
 from mocap.net import transport, wire
+from mocap.net.keys import ServerKeys
 from mocap_edge import pacing
 from mocap_edge.detect.base import Detector, Person, open_detector
 from mocap_edge.detect.tracking import Tracker
@@ -62,17 +63,18 @@ def detections(frames: Iterable[Frame], tracker: Tracker, camera: str,
         yield frame, people
 
 
-def bind(endpoint: str) -> zmq.Socket:
-    """The box's publisher; the port of a box that ran before in this process is released
-    by ZeroMQ shortly after its socket closed, so binding is retried for a second."""
+def bind(endpoint: str, keys: ServerKeys | None = None) -> zmq.Socket:
+    """The box's publisher (a CURVE server with keys); the port of a box that ran before in
+    this process is released by ZeroMQ shortly after its socket closed, so binding is retried
+    for a second."""
     context = zmq.Context.instance()
     for _ in range(BIND_ATTEMPTS - 1):
         try:
-            return transport.publisher(context, endpoint)
+            return transport.publisher(context, endpoint, keys=keys)
         except zmq.ZMQError as e:
             log.debug("cannot bind %s yet (%s): retrying", endpoint, e)
             time.sleep(BIND_RETRY_S)
-    return transport.publisher(context, endpoint)
+    return transport.publisher(context, endpoint, keys=keys)
 
 
 def paired(frames: Iterable[Frame], pairing: TriggerPairing | None, exposure_mid_ns: int) -> Iterable[Frame]:
@@ -84,14 +86,15 @@ def paired(frames: Iterable[Frame], pairing: TriggerPairing | None, exposure_mid
 
 def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple[int, int] = (1, 1),
         pairing: TriggerPairing | None = None, realtime: bool = False, model: Detector | None = None,
-        max_people: int = 2, exposure_mid_ns: int = 0) -> BoxCounts:
+        max_people: int = 2, exposure_mid_ns: int = 0, keys: ServerKeys | None = None) -> BoxCounts:
     """Publishes every frame of `frames` (paired with trigger edges when given). realtime:
     a file source is played at its capture times instead of as fast as detection runs.
     model: any Detector (default BlazePose). exposure_mid_ns: from the trigger edge (which
     a paired frame's time is) to the middle of the exposure, the time KeypointFrame names —
-    the sensor's trigger delay plus half the exposure."""
+    the sensor's trigger delay plus half the exposure. keys: the box's CURVE identity (None:
+    a stream without keys)."""
     tracker = Tracker(model or open_detector("blazepose"), max_people=max_people)
-    socket, counts = bind(endpoint), BoxCounts()
+    socket, counts = bind(endpoint, keys), BoxCounts()
     try:
         for frame, people in detections(paired(frames, pairing, exposure_mid_ns), tracker, camera, detect_every):
             if realtime:

@@ -13,6 +13,10 @@ import sys
 import time
 
 import can
+import zmq
+
+from mocap.net import transport
+from mocap.net.keys import ServerKeys
 
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.can_bus import open_bus
@@ -34,14 +38,15 @@ def _stop_on_signals():
     return lambda: bool(stopping)
 
 
-def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, duration_s: float = 0.0) -> int:
+def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, duration_s: float = 0.0,
+        keys: ServerKeys | None = None) -> int:
     config = HubConfig.load(config_path)
     if config.names and not can_uri or config.i2c and not i2c_uri:
         raise EdgeError(f"{config_path} names {'CAN nodes' if config.names and not can_uri else 'I2C IMUs'}: "
                         f"give {'--can' if config.names and not can_uri else '--i2c'}")
     local = _local_imus(config, i2c_uri) if config.i2c else []
     port = open_bus(can_uri) if can_uri else None
-    publish, socket = publisher(bind)
+    publish, socket = publisher(bind, keys)
     stop = _stop_on_signals()
     service = HubService(port, Hub(config), publish, local=local,
                          reopen=(lambda: open_bus(can_uri)) if can_uri else None)
@@ -54,7 +59,9 @@ def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, d
         socket.close()
     i2c = {imu.name: dataclasses.asdict(imu.counts) for imu in local}
     print(f"imu hub: {n} batches sent; nodes {sorted(service.hub.nodes)}; dropped {dict(service.hub.dropped)}; "
-          f"bus errors {dict(service.bus_errors.counts)}" + (f"; i2c {i2c}" if i2c else ""), file=sys.stderr)
+          f"bus errors {dict(service.bus_errors.counts)}" + (f"; i2c {i2c}" if i2c else "")
+          + (f"; {transport.refused(zmq.Context.instance())} subscribers refused" if keys and keys.allowed else ""),
+          file=sys.stderr)
     return 0
 
 

@@ -15,6 +15,7 @@ import time
 import can
 import zmq
 from mocap.net import transport, wire
+from mocap.net.keys import ServerKeys
 
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.bus_errors import BusErrors
@@ -193,7 +194,8 @@ def _after(due_ns: int, period_ns: int, now_ns: int) -> int:
     return due_ns + period_ns if due_ns + period_ns > now_ns else now_ns + period_ns
 
 
-def publisher(endpoint: str):
-    """A publish(message) function on a ZeroMQ PUB socket bound at endpoint, and the socket."""
-    socket = transport.publisher(zmq.Context.instance(), endpoint)
+def publisher(endpoint: str, keys: ServerKeys | None = None):
+    """A publish(message) function on a ZeroMQ PUB socket bound at endpoint (a CURVE server
+    with keys), and the socket."""
+    socket = transport.publisher(zmq.Context.instance(), endpoint, keys=keys)
     return lambda batch: socket.send_multipart(wire.encode(batch)), socket

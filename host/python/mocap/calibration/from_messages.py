@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import shutil
 from collections import defaultdict
 from collections.abc import Iterable
@@ -150,6 +151,9 @@ def write_session(out: Path, session: Path, estimated: Estimated, report: dict) 
     # Headings fitted to this video: tracked against it, without a baseline (solver.h).
     calibrated = dataclasses.replace(config, skeleton="skeleton.json", imus="imus.json", layout="layout.json",
                                      imus_calibrated=True, base=out, **copied)
+    if config.curve is not None:  # the same host key file, named from the new session's folder
+        key = os.path.relpath((config.base / config.curve.host_key).resolve(), out.resolve())
+        calibrated.curve = dataclasses.replace(config.curve, host_key=key)
     calibrated = calibrated.with_solver(heading_time_constant=window.HEADING_TIME_CONSTANT_S, heading_baseline_s=0.0)
     floor = estimated.report.get("window", {}).get("floor_height_m")  # E_G's floor, when the window saw one
     if floor is not None:

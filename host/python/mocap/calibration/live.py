@@ -43,7 +43,9 @@ import zmq
 
 from mocap.calibration import informative, window
 from mocap.calibration.from_messages import Estimated, MotionWatch, estimate, write_session
+from mocap.io.session import Session
 from mocap.net import transport, wire
+from mocap.net.keys import ServerKeys
 
 log = logging.getLogger(__name__)
 
@@ -234,8 +236,12 @@ def follow(endpoints: list[str], session: Path, out: Path, publish: str, seconds
     calibrator = LiveCalibrator(Path(session).resolve(), Path(out), seconds, policy, source)
     deadline = None if duration_s is None else time.monotonic() + duration_s
     context = zmq.Context.instance()
-    with WorkerPool() as pool, \
-            transport.subscriber(context, endpoints) as sub, transport.publisher(context, publish) as pub:
+    # With the session's keys: a client of the boxes, and a server to mocapd, with the host's key pair.
+    config = Session.load(session)
+    client, pair = config.client_keys(), config.host_keys()
+    server = None if pair is None else ServerKeys(pair)
+    with WorkerPool() as pool, transport.subscriber(context, endpoints, keys=client) as sub, \
+            transport.publisher(context, publish, keys=server) as pub:
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             if sub.poll(100):
                 while True:

@@ -23,6 +23,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "calibrates, then refines, during the take; oracle: the truth")
     d.add_argument("--still-start", type=float, default=0.0, metavar="S",
                    help="the performer stands still for S seconds before moving")
+    d.add_argument("--curve", action="store_true", help="every stream authenticated and encrypted with CURVE keys "
+                   "(each device's key pair in OUT/session/keys; README, \"Securing the streams\"); off by default: "
+                   "the simulated studio stays on loopback")
     d.set_defaults(func=run)
 
 
@@ -38,7 +41,8 @@ def _progress(health) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     result = demo.run(out, args.seconds, vmc=args.vmc, seed=args.seed, record=args.record,
-                      calibration=args.calibration, still_s=args.still_start, progress=_progress)
+                      calibration=args.calibration, still_s=args.still_start, progress=_progress,
+                      curve=args.curve)
     print(file=sys.stderr)
     print((out / "report.md").read_text(), file=sys.stderr)
     return 0 if result["solved"] else 1

@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     rec.add_argument("--out", required=True, help="MCAP file to write")
     rec.add_argument("--seconds", type=float, default=None, help="stop after this long (default: at Ctrl-C)")
     rec.add_argument("--session", default=None, help="attach this session file and the files it names "
-                     "(then `mocap solve --recording` needs nothing else)")
+                     "(then `mocap solve --recording` needs nothing else); its CURVE keys, if any, are used")
     rec.set_defaults(func=run)
 
 

@@ -19,6 +19,7 @@ import zmq
 from mocap import paths
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
+from mocap.io.session import Session
 from mocap.net import transport, wire
 
 MOCAPD = paths.REPO / "build" / "host" / "mocapd"
@@ -38,7 +39,14 @@ def camera_box_command(studio: Studio, c: int, start_ns: int, unplugged: tuple |
         cmd += ["--hs", *map(str, studio.detect_every)]
     if unplugged and unplugged[0] == camera:
         cmd += ["--stop", *map(str, unplugged[1:])]
-    return cmd
+    return cmd + _box_keys(studio, camera)
+
+
+def _box_keys(studio: Studio, device: str) -> list[str]:
+    """A box's key options in a studio with keys: its secret key, and the host admitted."""
+    if studio.keys is None:
+        return []
+    return ["--curve-secret", str(studio.keys / f"{device}.key"), "--curve-allow", str(studio.keys / "host.pub")]
 
 
 def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
@@ -57,7 +65,7 @@ def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> li
         raise InputError(f"the simulated sensor nodes did not start (status {nodes.wait()}; their log is above)")
     hub = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can",
                             f"socketcand:127.0.0.1:{listening[1]}:can0", "--config", str(studio.hub_config),
-                            "--bind", studio.endpoints["hub0"]])
+                            "--bind", studio.endpoints["hub0"], *_box_keys(studio, "hub0")])
     return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
@@ -136,7 +144,8 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     edge = [subprocess.Popen(cmd) for cmd in commands]
     edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
     recording = subprocess.Popen(_recorder_command(studio, record, duration)) if record else None
-    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]])
+    keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
+    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:
         poses, healths = _collect(host, sub, progress, on_pose)
         lines = host.stdout.read().strip().splitlines()

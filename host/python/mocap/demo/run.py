@@ -26,12 +26,15 @@ def _vmc_sender(vmc: str | None, skeleton: _core.Skeleton) -> VmcSender | None:
 
 
 def run(out: Path, seconds: float, vmc: str | None = None, seed: int = 0, record: str | None = None,
-        calibration: str = "estimated", still_s: float = 0.0, progress: Callable | None = None) -> dict:
+        calibration: str = "estimated", still_s: float = 0.0, progress: Callable | None = None,
+        curve: bool = False) -> dict:
     """Prepares and plays the studio into `out` (session/, demo.bvh, demo_joints.csv,
-    report.md); progress(health) once a second. The result of mocap.demo.score."""
+    report.md); progress(health) once a second; curve: every stream with CURVE keys. The result of
+    mocap.demo.score."""
     out.mkdir(parents=True, exist_ok=True)
     log.info("mocap demo: simulating %.0f s of the studio into %s", seconds, out / "session")
-    prepared = studio.prepare(out / "session", seconds, seed=seed, calibration=calibration, still_s=still_s)
+    prepared = studio.prepare(out / "session", seconds, seed=seed, calibration=calibration, still_s=still_s,
+                            curve=curve)
     sender = _vmc_sender(vmc, prepared.session_skeleton)
     log.info("mocap demo: starting mocapd and %d camera boxes + an IMU hub", len(prepared.camera_ids))
     played = play.play(prepared, progress=progress,

@@ -20,9 +20,9 @@ import numpy as np
 from mocap import _core, paths
 from mocap.calibration import from_messages, window
 from mocap.errors import InputError
-from mocap.io.session import Session, SyncSettings
+from mocap.io.session import CurveSettings, Session, SyncSettings
 from mocap.model.solver import imu_set_json
-from mocap.net import wire
+from mocap.net import keys, wire
 from mocap.sim import demo_motion
 from mocap.sim import take as sim_take
 from mocap_edge import offline
@@ -50,6 +50,7 @@ class Studio:
     calibration: str  # "estimated", "oracle" or "live"
     calibrator: str | None = None  # live: the calibrator's endpoint (its sessions in `calibrated`)
     detect_every: tuple[int, int] = (1, 1)  # the cameras' (period, burst): high-speed mode when period > 1
+    keys: Path | None = None  # the devices' CURVE key pairs (DEVICE.key, DEVICE.pub); None: streams without keys
 
     @property
     def calibrated(self) -> Path:
@@ -121,12 +122,24 @@ def _calibration_files(folder: Path, calibration: str, skeleton: _core.Skeleton,
     return session_skeleton, layout
 
 
+def _make_keys(folder: Path, camera_ids: list[str], endpoints: dict[str, str], inputs: list[str]) -> CurveSettings:
+    """A key pair per device (the host's too) and the session's "curve" object naming them."""
+    public = {}
+    for device in ["host", *camera_ids, "hub0"]:
+        keys.make_keypair(folder, device, force=True)
+        public[device] = keys.read_secret(folder / f"{device}.key").public
+    public["calibrator"] = public["host"]
+    return CurveSettings(f"{folder.name}/host.key", {endpoints[d]: public[d] for d in [*camera_ids, "hub0", "calibrator"]
+                                                     if endpoints[d] in inputs})
+
+
 def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | None = None, seed: int = 0,
-            calibration: str = "estimated", still_s: float = 0.0) -> Studio:
+            calibration: str = "estimated", still_s: float = 0.0, curve: bool = False) -> Studio:
     """Simulates `seconds` of the demo motion (after standing still for still_s, if given)
     and writes the session (skeleton, told rig, IMU set, layout, prior, endpoints) and the
     stream file into `folder`; the calibration is "estimated", "oracle" or "live" (see the
-    module docstring)."""
+    module docstring). curve: every stream authenticated and encrypted, each device with a key
+    pair of its own in folder/keys (the live calibrator serves the host's)."""
     if calibration not in ("estimated", "oracle", "live"):
         raise InputError(f"calibration is 'estimated', 'oracle' or 'live', not {calibration!r}")
     folder.mkdir(parents=True, exist_ok=True)
@@ -141,11 +154,13 @@ def prepare(folder: Path, seconds: float, preset: str = "hq13", cameras: int | N
     session = Session("skeleton.json", "rig.json", layout, "imus.json", inputs, endpoints["host"],
                       prior=str(paths.HOST_DATA / "prior_default.json"), sync=SyncSettings(max_wait_ms=MAX_WAIT_MS),
                       solver={} if calibration == "oracle" else {"heading_time_constant": window.HEADING_TIME_CONSTANT_S},
-                      imus_calibrated=calibration != "live")
+                      imus_calibrated=calibration != "live",
+                      curve=_make_keys(folder / "keys", camera_ids, endpoints, inputs) if curve else None)
     detect_every = (sim_take.PRESETS[preset].period, sim_take.PRESETS[preset].burst)
     path = session.save(folder / "session.json")
     if calibration == "estimated":
         session_skeleton = calibrate(path, folder / "streams.npz", detect_every)
     return Studio(path, folder / "streams.npz", skeleton, thetas, t.times, camera_ids,
                   {k: v for k, v in endpoints.items() if k != "calibrator"}, session_skeleton, calibration,
-                  endpoints["calibrator"] if calibration == "live" else None, detect_every)
+                  endpoints["calibrator"] if calibration == "live" else None, detect_every,
+                  folder / "keys" if curve else None)

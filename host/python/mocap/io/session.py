@@ -5,14 +5,18 @@ mocap.session/1, read by mocapd: host/daemon/session.h).
      "skeleton": path, "rig": path, "layout": path, "imus": path, "prior": path or null,
      "inputs": ["tcp://edge-box-1:5600", ...], "output": "tcp://*:5700",
      "sync": {"max_wait_ms": 25, ...}, "solver": {"heading_time_constant": 1, ...},
-     "imus_calibrated": true}
+     "imus_calibrated": true,
+     "curve": {"host_key": "keys/host.key", "inputs": {"tcp://edge-box-1:5600": "Z85 public key", ...},
+               "subscribers": ["Z85 public key", ...]}}
 
 Paths are relative to the session file. `Session` is the one reader and writer of the
 Python tools (the calibration, the demo's studio, a recording's attachment): it refuses
 what mocapd refuses — an unknown key anywhere, a "sync" value that is not a number, a
 "solver" object mocapd's own parser rejects (an unknown option, a value of the wrong type or
 out of range) — so nothing written here is dropped or refused by mocapd. "sync" and "solver"
-hold only the settings that differ from mocapd's defaults.
+hold only the settings that differ from mocapd's defaults. "curve" (optional) holds the
+streams' CURVE keys (`CurveSettings`; host/daemon/curve_keys.h); without it nothing is
+authenticated, which mocapd allows only for inputs on this machine.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from typing import Any
 
 from mocap import _core
 from mocap.errors import InputError
+from mocap.net import keys
 
 FORMAT = "mocap.session/1"
 FILES = ("skeleton", "rig", "layout", "imus", "prior")  # the keys that name files
@@ -59,6 +64,53 @@ class SyncSettings:
 
 
 @dataclasses.dataclass
+class CurveSettings:
+    """The "curve" object: the host's secret key file (relative to the session's folder), each
+    input endpoint's server key, and (optional) the clients admitted on mocapd's output besides
+    the host's own key (None: any client that knows the host's public key)."""
+    host_key: str
+    inputs: dict[str, str]
+    subscribers: list[str] | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"host_key": self.host_key, "inputs": dict(self.inputs)}
+        if self.subscribers is not None:
+            out["subscribers"] = list(self.subscribers)
+        return out
+
+    @classmethod
+    def from_json(cls, data: Any, inputs: list[str], where: str) -> CurveSettings:
+        """Refuses what mocapd refuses: an unknown key, a key that is not 40 characters of
+        Z85, a key for no input, an input without a key."""
+        if not isinstance(data, dict):
+            raise InputError(f"{where}: curve is an object")
+        unknown = [k for k in data if k not in ("host_key", "inputs", "subscribers")]
+        if unknown:
+            raise InputError(f"{where}: unknown curve key '{unknown[0]}'")
+        if not isinstance(data.get("host_key"), str):
+            raise InputError(f"{where}: curve: host_key (the host's secret key file) is missing")
+        given = data.get("inputs")
+        if not isinstance(given, dict):
+            raise InputError(f"{where}: curve: inputs (endpoint -> public key) is missing")
+        for endpoint, key in given.items():
+            if endpoint not in inputs:
+                raise InputError(f"{where}: curve: key for '{endpoint}', which is not an input")
+            if not keys.is_key(key):
+                raise InputError(f"{where}: curve: the key of '{endpoint}' is not a public key "
+                                 "(40 characters of Z85, as `mocap keys` writes)")
+        missing = [e for e in inputs if e not in given]
+        if missing:
+            raise InputError(f"{where}: curve: no key for input '{missing[0]}'")
+        subscribers = data.get("subscribers")
+        if subscribers is not None and not isinstance(subscribers, list):
+            raise InputError(f"{where}: curve: subscribers is a list of public keys")
+        for key in subscribers or []:
+            if not keys.is_key(key):
+                raise InputError(f"{where}: curve: subscriber {json.dumps(key)} is not a public key")
+        return cls(data["host_key"], dict(given), subscribers)
+
+
+@dataclasses.dataclass
 class Session:
     """A session file's contents. File names are as written (relative to `base`, the
     session file's folder, or absolute); `file(key)` resolves one."""
@@ -74,12 +126,31 @@ class Session:
     # (_core.session_solver_keys()); the ones absent keep mocapd's defaults.
     solver: dict[str, Any] = dataclasses.field(default_factory=dict)
     imus_calibrated: bool = True  # False: mocapd waits for a Calibration before using the IMUs
+    curve: CurveSettings | None = None  # None: streams without keys
     base: Path = dataclasses.field(default=Path("."), compare=False)  # not written
 
     def file(self, key: str) -> Path | None:
         """The file named under `key` (one of FILES), resolved against `base`; None for no prior."""
         name = getattr(self, key)
         return None if name is None else self.base / name
+
+    def host_keys(self) -> keys.KeyPair | None:
+        """The host's key pair (its secret key file read), or None without "curve"."""
+        if self.curve is None:
+            return None
+        try:
+            return keys.read_secret(self.base / self.curve.host_key)
+        except keys.KeyFileError as e:
+            raise InputError(f"session: {e}") from None
+
+    def client_keys(self) -> keys.ClientKeys | None:
+        """What a subscriber on the host uses (the recorder, the calibrator, the demo): the
+        host's key pair, each input's server key; any other endpoint is taken for mocapd's
+        output, whose server key is the host's. None without "curve"."""
+        pair = self.host_keys()
+        if pair is None:
+            return None
+        return keys.ClientKeys(pair, dict(self.curve.inputs), default=pair.public)
 
     def solver_options(self) -> _core.SolverOptions:
         """The solver options mocapd solves with: its defaults, then "solver"."""
@@ -99,6 +170,8 @@ class Session:
         if self.solver:
             out["solver"] = self.solver
         out["imus_calibrated"] = self.imus_calibrated
+        if self.curve is not None:
+            out["curve"] = self.curve.to_json()
         return out
 
     def dumps(self) -> str:
@@ -115,7 +188,7 @@ class Session:
         """A session from its JSON object; InputError names what mocapd would refuse."""
         if not isinstance(data, dict):
             raise InputError(f"{where}: a session is a JSON object")
-        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated")
+        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated", "curve")
         unknown = [key for key in data if key not in known]
         if unknown:
             raise InputError(f"{where}: unknown session key '{unknown[0]}'")
@@ -126,8 +199,10 @@ class Session:
             raise InputError(f"{where}: no {', '.join(missing)}")
         session = cls(data["skeleton"], data["rig"], data["layout"], data["imus"], list(data["inputs"]),
                       data["output"], data.get("prior"), SyncSettings.from_json(data.get("sync", {}), where),
-                      dict(data.get("solver", {})), data.get("imus_calibrated", True), Path(base))
+                      dict(data.get("solver", {})), data.get("imus_calibrated", True), None, Path(base))
         session._check(where)
+        if "curve" in data:
+            session.curve = CurveSettings.from_json(data["curve"], session.inputs, where)
         return session
 
     @classmethod
@@ -149,6 +224,8 @@ class Session:
             raise InputError(f"{where}: imus_calibrated is true or false")
         SyncSettings.from_json(self.sync.to_json(), where)
         _parse_solver(self.solver, where)
+        if self.curve is not None:
+            CurveSettings.from_json(self.curve.to_json(), self.inputs, where)
 
 
 def _parse_solver(solver: dict[str, Any], where: str) -> _core.SolverOptions:

@@ -44,6 +44,7 @@ from mcap.writer import Writer
 
 from mocap.io.session import FILES, Session
 from mocap.net import transport, wire
+from mocap.net.keys import ClientKeys
 
 log = logging.getLogger(__name__)
 
@@ -144,7 +145,9 @@ class Recorder:
 
     def attach_session(self, session: str | Path) -> None:
         """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
-        prior), so that the recording can be solved without them (reader.read_session)."""
+        prior), so that the recording can be solved without them (reader.read_session). Its
+        "curve" keys are left out: they are the live streams', and the host's secret key file
+        is never copied into a recording."""
         config = Session.load(session)
         renamed = {}
         for key in FILES:
@@ -152,7 +155,7 @@ class Recorder:
             if source is not None:
                 self._attach(f"session/{key}.json", source.read_bytes())
                 renamed[key] = f"{key}.json"
-        self._attach("session/session.json", dataclasses.replace(config, **renamed).dumps().encode())
+        self._attach("session/session.json", dataclasses.replace(config, curve=None, **renamed).dumps().encode())
         self._file.flush()
 
     def _attach(self, name: str, data: bytes) -> None:
@@ -195,7 +198,8 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
     deadline = None if seconds is None else time.monotonic() + seconds
     stop = stop or threading.Event()
     received: queue.Queue = queue.Queue()
-    receiver = threading.Thread(target=_receive, args=(endpoints, received, stop, deadline), daemon=True,
+    keys = Session.load(session).client_keys() if session is not None else None
+    receiver = threading.Thread(target=_receive, args=(endpoints, received, stop, deadline, keys), daemon=True,
                                 name="recorder-receive")
     with Recorder(path, on_record) as recorder:
         if session is not None:
@@ -211,9 +215,10 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
         return recorder.counts()
 
 
-def _receive(endpoints: list[str], received: queue.Queue, stop: threading.Event, deadline: float | None) -> None:
+def _receive(endpoints: list[str], received: queue.Queue, stop: threading.Event, deadline: float | None,
+             keys: ClientKeys | None) -> None:
     """Puts (frames, arrival ns) of every message in `received` until stop or the deadline."""
-    with zmq.Context() as context, transport.subscriber(context, endpoints) as socket:
+    with zmq.Context() as context, transport.subscriber(context, endpoints, keys=keys) as socket:
         while not stop.is_set() and (deadline is None or time.monotonic() < deadline):
             if socket.poll(POLL_MS):
                 frames = socket.recv_multipart()

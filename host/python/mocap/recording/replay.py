@@ -12,6 +12,7 @@ import zmq
 
 from mocap.errors import InputError
 from mocap.net import transport, wire
+from mocap.net.keys import ServerKeys
 from mocap.recording import reader
 from mocap.recording.reader import RecordedMessage
 
@@ -20,7 +21,7 @@ BACKPRESSURE_SLEEP_S = 0.001  # `replay`'s pause while a subscriber's queue is f
 REPLAY_LINGER_MS = 10_000  # time the last queued messages get to reach slow subscribers
 
 def replay(recording: str | Path | reader.Recording, endpoint: str, speed: float | None = 1.0, topics: Iterable[str] | None = None,
-           wait_for_subscribers: float = 1.0, restamp: bool = False) -> int:
+           wait_for_subscribers: float = 1.0, restamp: bool = False, keys: ServerKeys | None = None) -> int:
     """Publishes the recorded messages on `endpoint` as [type, payload]; returns how many were sent.
 
     topics: fnmatch patterns of the topics to send (default INPUT_TOPICS, the host's inputs).
@@ -34,6 +35,8 @@ def replay(recording: str | Path | reader.Recording, endpoint: str, speed: float
     restamp (with a speed): every capture, sample and send time is moved by the time between
     the recording and now, so a live host takes the replay for a take happening now (its
     synchroniser waits for inputs by their capture time); the recording's own bytes otherwise.
+    keys: publish as a CURVE server with this identity (the session of the mocapd it feeds
+    lists its public key for the endpoint).
     """
     if restamp and speed is None:
         raise InputError("restamping needs a replay speed: as fast as possible has no 'now'")
@@ -41,10 +44,10 @@ def replay(recording: str | Path | reader.Recording, endpoint: str, speed: float
         raise InputError(f"replay speed must be positive, not {speed}")
     if not isinstance(recording, reader.Recording):  # a path
         with reader.Recording(recording) as opened:
-            return replay(opened, endpoint, speed, topics, wait_for_subscribers, restamp)
+            return replay(opened, endpoint, speed, topics, wait_for_subscribers, restamp, keys)
     patterns = tuple(INPUT_TOPICS if topics is None else topics)
     messages = (m for m in recording.messages() if any(fnmatch.fnmatchcase(m.topic, p) for p in patterns))
-    with zmq.Context() as context, _replay_socket(context, endpoint) as socket:
+    with zmq.Context() as context, _replay_socket(context, endpoint, keys) as socket:
         if socket.poll(wait_for_subscribers * 1000):
             socket.recv()  # the first subscription
         return _publish(socket, messages, speed, restamp)
@@ -86,9 +89,12 @@ def shift(message, offset_ns: int) -> None:
         message.valid_from_ns += offset_ns
 
 
-def _replay_socket(context: zmq.Context, endpoint: str) -> zmq.Socket:
+def _replay_socket(context: zmq.Context, endpoint: str, keys: ServerKeys | None) -> zmq.Socket:
     """A PUB socket that reports subscriptions and refuses (instead of dropping) at the high-water mark."""
     socket = context.socket(zmq.XPUB)
+    if keys is not None:
+        socket.curve_server = True
+        socket.curve_secretkey = keys.pair.secret.encode()
     socket.setsockopt(zmq.SNDHWM, transport.PUBLISHER_HWM)
     socket.setsockopt(zmq.XPUB_NODROP, 1)
     socket.setsockopt(zmq.LINGER, REPLAY_LINGER_MS)

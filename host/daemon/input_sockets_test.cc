@@ -1,0 +1,139 @@
+// mocapd's subscribers with CURVE: a publisher on an input's endpoint that does not hold the
+// secret key the session expects there is refused (none of its messages arrives) and counted
+// on that input; the right publisher is heard, after a stranger too.
+#include "input_sockets.h"
+
+#include <gtest/gtest.h>
+#include <zmq.h>
+
+#include <functional>
+#include <thread>
+
+namespace mocap {
+namespace {
+
+struct KeyPair {
+  std::string pub, secret;
+  KeyPair() {
+    char p[41], s[41];
+    zmq_curve_keypair(p, s);
+    pub = p;
+    secret = s;
+  }
+};
+
+// A publisher on endpoint ("...:*" picks a port); secret empty: no CURVE.
+zmq::socket_t Publisher(zmq::context_t& context, const std::string& endpoint,
+                        const std::string& secret) {
+  zmq::socket_t pub(context, zmq::socket_type::pub);
+  pub.set(zmq::sockopt::linger, 0);
+  if (!secret.empty()) {
+    pub.set(zmq::sockopt::curve_server, true);
+    pub.set(zmq::sockopt::curve_secretkey, secret);
+  }
+  // A port closed a moment ago by another socket is released by ZeroMQ's I/O thread shortly.
+  for (int attempt = 0;; ++attempt) {
+    try {
+      pub.bind(endpoint);
+      return pub;
+    } catch (const zmq::error_t& e) {
+      if (e.num() != EADDRINUSE || attempt == 100) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+}
+
+class SecureInputs : public ::testing::Test {
+ protected:
+  // Publishes from pub and runs the inputs until done(messages received) or 1000 polls of at
+  // most 5 ms; the messages received.
+  int Run(zmq::socket_t& pub, const std::function<bool(int)>& done) {
+    int received = 0;
+    for (int i = 0; i < 1000 && !done(received); ++i) {
+      pub.send(zmq::str_buffer("mocap.v1.Health"), zmq::send_flags::sndmore);
+      pub.send(zmq::str_buffer(""), zmq::send_flags::none);
+      inputs_.Poll(std::chrono::milliseconds(5));
+      inputs_.Drain([&](std::vector<zmq::message_t>&) { received++; });
+      // Past the retry delay at once: the test need not wait a second per retry.
+      inputs_.Watch(++tick_ * InputSockets::kRetryNs);
+    }
+    return received;
+  }
+  // The session expects box_ on the endpoint of a first publisher, bound here.
+  zmq::socket_t OpenWith(const std::string& secret) {
+    zmq::socket_t pub = Publisher(context_, "tcp://127.0.0.1:*", secret);
+    endpoint_ = pub.get(zmq::sockopt::last_endpoint);
+    session_.inputs = {endpoint_};
+    session_.curve = CurveKeys{host_.pub, host_.secret, {{endpoint_, box_.pub}}, {}, false};
+    std::string error;
+    EXPECT_TRUE(inputs_.Open(session_, &error)) << error;
+    return pub;
+  }
+  const InputLink& link() const { return inputs_.links().at(0); }
+
+  zmq::context_t context_;
+  KeyPair host_, box_, stranger_;
+  Session session_;
+  std::string endpoint_;
+  int64_t tick_ = 0;
+  InputSockets inputs_{context_};
+};
+
+TEST_F(SecureInputs, AStrangerIsRefusedAndCountedThenTheBoxIsHeard) {
+  zmq::socket_t stranger = OpenWith(stranger_.secret);
+  EXPECT_EQ(Run(stranger, [&](int) { return link().handshake_failures >= 3; }), 0);
+  EXPECT_GE(link().handshake_failures, 3u);
+  EXPECT_FALSE(link().connected);
+  stranger.close();
+  const uint64_t refused = link().handshake_failures;
+  zmq::socket_t box = Publisher(context_, endpoint_, box_.secret);
+  EXPECT_GE(Run(box, [](int received) { return received >= 10; }), 10);
+  EXPECT_TRUE(link().connected);
+  EXPECT_EQ(link().handshake_failures, refused);
+}
+
+TEST_F(SecureInputs, APublisherWithoutCurveIsRefusedAndTheInputConnectedAnew) {
+  zmq::socket_t plain = OpenWith("");
+  EXPECT_EQ(Run(plain, [&](int) { return link().handshake_failures >= 2; }), 0);
+  // libzmq alone would not retry after this protocol error: the second failure shows the
+  // input connected anew.
+  EXPECT_GE(link().handshake_failures, 2u);
+  plain.close();
+  zmq::socket_t box = Publisher(context_, endpoint_, box_.secret);
+  EXPECT_GE(Run(box, [](int received) { return received >= 10; }), 10);
+}
+
+TEST_F(SecureInputs, HealthReportsEachInputsLink) {
+  zmq::socket_t stranger = OpenWith(stranger_.secret);
+  Run(stranger, [&](int) { return link().handshake_failures >= 1; });
+  v1::Health health;
+  inputs_.AppendTo(&health);
+  ASSERT_EQ(health.streams_size(), 1);
+  EXPECT_EQ(health.streams(0).stream(), "link/" + endpoint_);
+  EXPECT_FALSE(health.streams(0).active());
+  EXPECT_EQ(health.streams(0).handshake_failures(), link().handshake_failures);
+  EXPECT_GE(health.streams(0).handshake_failures(), 1u);
+}
+
+TEST(Inputs, WithoutKeysAPlainPublisherIsHeard) {
+  zmq::context_t context;
+  zmq::socket_t pub = Publisher(context, "tcp://127.0.0.1:*", "");
+  Session session;
+  session.inputs = {pub.get(zmq::sockopt::last_endpoint)};
+  InputSockets inputs(context);
+  std::string error;
+  ASSERT_TRUE(inputs.Open(session, &error)) << error;
+  int received = 0;
+  for (int i = 0; i < 1000 && received < 10; ++i) {
+    pub.send(zmq::str_buffer("x"), zmq::send_flags::none);
+    inputs.Poll(std::chrono::milliseconds(5));
+    inputs.Drain([&](std::vector<zmq::message_t>&) { received++; });
+    inputs.Watch(0);
+  }
+  EXPECT_GE(received, 10);
+  EXPECT_EQ(inputs.links().at(0).handshake_failures, 0u);
+  EXPECT_TRUE(inputs.links().at(0).connected);
+}
+
+}  // namespace
+}  // namespace mocap
