@@ -357,8 +357,9 @@ TEST(Solver, RejectsInconsistentConfiguration) {
   EXPECT_FALSE(solver->SetOptions(negative_time, &error));
 }
 
-// Cameras 400 times as far from the person with 400 times the focal length see the same
-// images: the pose they give, kilometres away, is refused and the previous one held.
+// Cameras 400 times as far from the person, aimed at it with 400 times the focal length, see
+// it as large as before: the pose they give, kilometres from them, is refused and the
+// previous one held.
 TEST(Solver, RefusesAPoseKilometresFromEveryCamera) {
   testing::Scene scene = testing::MakeScene(8);
   std::mt19937 rng(6);
@@ -366,6 +367,9 @@ TEST(Solver, RefusesAPoseKilometresFromEveryCamera) {
   const Eigen::Vector3d root = truth.head<3>();
   for (Camera& c : scene.rig.cameras) {
     const Eigen::Vector3d far = root + 400.0 * (c.Center() - root);
+    const Eigen::Vector3d z = (root - far).normalized();  // OpenCV: x right, y down, z forward
+    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+    c.rotation << x.transpose(), z.cross(x).transpose(), z.transpose();
     c.translation = -c.rotation * far;
     c.fx *= 400.0;
     c.fy *= 400.0;
