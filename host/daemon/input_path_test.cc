@@ -258,8 +258,9 @@ TEST(InputPath, InputsOnAnotherClockThanTheArrivalAreDropped) {
   const int64_t hour = 3'600'000'000'000;
   std::string why;
   EXPECT_FALSE(Feed(&path, studio.Keypoints(0, 0), kT0 + hour, &why));
-  EXPECT_EQ(why.rfind("clock_offset: " + studio.scene.rig.cameras[0].name + " frame 0 captured 3600", 0),
-            0u)
+  EXPECT_EQ(
+      why.rfind("clock_offset: " + studio.scene.rig.cameras[0].name + " frame 0 captured 3600", 0),
+      0u)
       << why;
   EXPECT_FALSE(Feed(&path, studio.Imus(0), kT0 - hour, &why));  // ahead of the host: refused too
   EXPECT_NE(why.find("samples of hub hub0"), std::string::npos) << why;

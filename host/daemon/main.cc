@@ -39,8 +39,7 @@ bool ParseNumber(const char* text, double lo, double hi, double* out) {
 }
 
 // Fills `options` and `realtime_priority` from argv[2..]; false with a message on stderr.
-bool ParseArguments(int argc, char** argv, mocap::DaemonOptions* options,
-                    int* realtime_priority) {
+bool ParseArguments(int argc, char** argv, mocap::DaemonOptions* options, int* realtime_priority) {
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--quiet") {

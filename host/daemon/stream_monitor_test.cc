@@ -40,7 +40,7 @@ TEST(StreamMonitor, HealthReportsEachStreamOverThePeriod) {
   in.calibration_active = true;
   in.frames_solved = 7;
   in.frames_failed = 2;  // poses the solver refused
-  m.Health(t0, in);  // starts the period
+  m.Health(t0, in);      // starts the period
   for (int k = 0; k < 50; ++k) {
     if (k != 20) m.camera(0).Count(k, 0, t0 + k * kMs, t0 + k * kMs);  // frame 20 lost
   }
