@@ -13,11 +13,12 @@ std::vector<std::string> Names(const std::vector<T>& items) {
 }
 
 // An input whose time is this far from its arrival is on another clock: edge clocks follow
-// the host's to well under a millisecond and an input's latency is tens of milliseconds, while
-// the synchroniser's deadlines (max_wait, 25 ms) compare the two. Mixed, every frame is released
-// on its first camera, the others dropped as late, and one camera's depth guess is solved (a
-// recording replayed without --restamp: joints kilometres away).
-constexpr int64_t kMaxClockOffsetNs = 1'000'000'000;
+// the host's to well under a millisecond and an input's latency is tens of milliseconds; a
+// loaded machine's start-up burst arrives ~1.1 s late (tests/test_live.py on 2 busy cores),
+// and is late, not on another clock. The synchroniser's deadlines (max_wait, 25 ms) compare the
+// two times: mixed, every frame is released on its first camera, the others dropped as late,
+// and one camera's depth guess is solved (a recording replayed without --restamp).
+constexpr int64_t kMaxClockOffsetNs = 10'000'000'000;
 
 bool OffClock(int64_t time_ns, int64_t now_ns) {
   return now_ns - time_ns > kMaxClockOffsetNs || time_ns - now_ns > kMaxClockOffsetNs;
