@@ -43,7 +43,7 @@ def _camera(key: str, table: dict) -> _core.Camera:
 
 def load(path: str | Path) -> _core.Rig:
     if not Path(path).is_file():  # a FIFO would block the read
-        raise InputError(f"{path}: not a regular file")
+        raise InputError(f"{path}: not found or not a regular file")
     try:
         data = tomllib.loads(Path(path).read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
