@@ -76,6 +76,8 @@ int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] "
                  "[--realtime PRIORITY]\n"
+                 "  --duration S         stop after S seconds (> 0; default: until stopped)\n"
+                 "  --health-period S    Health every S seconds (0.1 to 3600; default 1)\n"
                  "  --realtime PRIORITY  solve under SCHED_FIFO at PRIORITY (1-99); without the\n"
                  "                       permission, a warning and normal scheduling\n";
     return argc < 2 ? 2 : 0;
