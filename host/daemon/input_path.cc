@@ -12,6 +12,24 @@ std::vector<std::string> Names(const std::vector<T>& items) {
   return names;
 }
 
+// An input whose time is this far from its arrival is on another clock: edge clocks follow
+// the host's to well under a millisecond and an input's latency is tens of milliseconds; a
+// loaded machine's start-up burst arrives ~1.1 s late (tests/test_live.py on 2 busy cores),
+// and is late, not on another clock. The synchroniser's deadlines (max_wait, 25 ms) compare the
+// two times: mixed, every frame is released on its first camera, the others dropped as late,
+// and one camera's depth guess is solved (a recording replayed without --restamp).
+constexpr int64_t kMaxClockOffsetNs = 10'000'000'000;
+
+bool OffClock(int64_t time_ns, int64_t now_ns) {
+  return now_ns - time_ns > kMaxClockOffsetNs || time_ns - now_ns > kMaxClockOffsetNs;
+}
+
+std::string OffClockDetail(int64_t time_ns, int64_t now_ns) {
+  return std::to_string(static_cast<double>(now_ns - time_ns) * 1e-9) +
+         " s before its arrival, on another clock than the host's (a recording replayed without "
+         "--restamp?)";
+}
+
 }  // namespace
 
 InputPath::InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const KeypointLayout& layout,
@@ -48,6 +66,12 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
     return monitor_.Drop(rejection.reason, rejection.detail, why);
   }
   monitor_.camera(c).Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
+  if (OffClock(frame.capture_time_ns(), now_ns)) {
+    return monitor_.Drop("clock_offset",
+                         frame.camera_id() + " frame " + std::to_string(frame.frame_index()) +
+                             " captured " + OffClockDetail(frame.capture_time_ns(), now_ns),
+                         why);
+  }
   // Projecting the tracked pose is needed only to tell several persons apart.
   const bool track =
       tracker && tracker->initialised() && frame.detected() && frame.persons_size() > 1;
@@ -63,7 +87,8 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
 
 bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why) {
   monitor_.hub(batch.hub_id()).Count(batch.sequence(), 0, batch.send_time_ns(), now_ns);
-  int unknown = 0;
+  int unknown = 0, off_clock = 0;
+  int64_t off_time_ns = 0;
   for (const v1::ImuSample& s : batch.samples()) {
     const int i = decoder_.ImuOf(s.sensor_id());
     if (i < 0) {
@@ -71,8 +96,21 @@ bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string*
       continue;
     }
     monitor_.imu(i).Count(s.packet_counter(), 1u << 16, s.sample_time_ns(), now_ns);
+    if (OffClock(s.sample_time_ns(), now_ns)) {
+      off_clock++;
+      off_time_ns = s.sample_time_ns();
+      continue;
+    }
     if (!sync_.AddImu(InputDecoder::ToImuInput(s, i), now_ns))
       monitor_.CountDropped("late_or_duplicate");
+  }
+  if (off_clock > 0) {
+    monitor_.CountDropped("clock_offset", off_clock - 1);
+    monitor_.Drop("clock_offset",
+                  std::to_string(off_clock) + " samples of hub " + batch.hub_id() + ", sampled " +
+                      OffClockDetail(off_time_ns, now_ns),
+                  unknown == 0 ? why : nullptr);
+    if (unknown == 0) return false;
   }
   if (unknown == 0) return true;
   monitor_.CountDropped("unknown_source", unknown - 1);

@@ -250,5 +250,25 @@ TEST(InputPath, TheTrackersPoseChoosesTheSubject) {
   }
 }
 
+// A recording replayed without moving its times to now: its inputs are an hour older than
+// their arrival. Each is dropped as clock_offset, so no frame is released on one camera.
+TEST(InputPath, InputsOnAnotherClockThanTheArrivalAreDropped) {
+  const Studio studio;
+  InputPath path = studio.Path();
+  const int64_t hour = 3'600'000'000'000;
+  std::string why;
+  EXPECT_FALSE(Feed(&path, studio.Keypoints(0, 0), kT0 + hour, &why));
+  EXPECT_EQ(
+      why.rfind("clock_offset: " + studio.scene.rig.cameras[0].name + " frame 0 captured 3600", 0),
+      0u)
+      << why;
+  EXPECT_FALSE(Feed(&path, studio.Imus(0), kT0 - hour, &why));  // ahead of the host: refused too
+  EXPECT_NE(why.find("samples of hub hub0"), std::string::npos) << why;
+  EXPECT_TRUE(path.TakeReady(kT0 + hour).empty());
+  EXPECT_EQ(path.monitor().dropped().at("clock_offset"), 1 + studio.scene.imus.size());
+  // Late by 9 s (a host far behind): late, but on the host's clock, so taken.
+  EXPECT_TRUE(Feed(&path, studio.Keypoints(1, 0), kT0 + kFrame + 9000 * kMs));
+}
+
 }  // namespace
 }  // namespace mocap

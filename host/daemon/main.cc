@@ -4,7 +4,9 @@
 // Prints one JSON line on exit: frames, latency percentiles, drops by reason, refused
 // handshakes per input, whether it ran under real-time scheduling.
 #include <algorithm>
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <map>
@@ -68,12 +70,65 @@ void PrintSummary(const mocap::DaemonSummary& summary, bool realtime) {
   std::cout << ", \"realtime\": " << (realtime ? "true" : "false") << "}" << std::endl;
 }
 
+// Bounds of the options: a duration of up to ~3 years keeps its nanoseconds in an int64;
+// Health at most 10 times a second (each is a line on stderr and a message to every viewer).
+constexpr double kMaxDurationS = 1e8, kMinHealthPeriodS = 0.1, kMaxHealthPeriodS = 3600;
+
+// The whole of `text` as a number in [lo, hi]; false for anything else (text, nan, inf).
+bool ParseNumber(const char* text, double lo, double hi, double* out) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v) || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+// Fills `options`, `realtime_priority` and `insecure` from argv[2..]; false with a message on
+// stderr.
+bool ParseArguments(int argc, char** argv, mocap::DaemonOptions* options, int* realtime_priority,
+                    bool* insecure) {
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quiet") {
+      options->log_health = false;
+      continue;
+    }
+    if (a == "--insecure") {
+      *insecure = true;
+      continue;
+    }
+    const bool takes_value = a == "--duration" || a == "--health-period" || a == "--realtime";
+    if (!takes_value) return std::cerr << "mocapd: unknown argument " << a << "\n", false;
+    if (i + 1 >= argc) return std::cerr << "mocapd: " << a << " needs a value\n", false;
+    const char* value = argv[++i];
+    double v = 0;
+    if (a == "--duration" && !ParseNumber(value, 1e-3, kMaxDurationS, &options->duration_s))
+      return std::cerr << "mocapd: --duration " << value
+                       << ": a number of seconds, > 0 (omit it to run until stopped)\n",
+             false;
+    if (a == "--health-period" &&
+        !ParseNumber(value, kMinHealthPeriodS, kMaxHealthPeriodS, &options->health_period_s))
+      return std::cerr << "mocapd: --health-period " << value
+                       << ": a number of seconds from 0.1 to 3600\n",
+             false;
+    if (a == "--realtime") {
+      if (!ParseNumber(value, mocap::kMinRealtimePriority, mocap::kMaxRealtimePriority, &v) ||
+          v != std::floor(v))
+        return std::cerr << "mocapd: --realtime " << value << ": a priority from 1 to 99\n", false;
+      *realtime_priority = static_cast<int>(v);
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::cerr << "usage: mocapd SESSION.json [--duration S] [--health-period S] [--quiet] "
                  "[--realtime PRIORITY] [--insecure]\n"
+                 "  --duration S         stop after S seconds (> 0; default: until stopped)\n"
+                 "  --health-period S    Health every S seconds (0.1 to 3600; default 1)\n"
                  "  --realtime PRIORITY  solve under SCHED_FIFO at PRIORITY (1-99); without the\n"
                  "                       permission, a warning and normal scheduling\n"
                  "  --insecure           run a session without keys whose inputs are not on\n"
@@ -83,24 +138,7 @@ int main(int argc, char** argv) {
   mocap::DaemonOptions options;
   int realtime_priority = 0;  // 0: normal scheduling
   bool insecure = false;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--duration" && i + 1 < argc)
-      options.duration_s = std::atof(argv[++i]);
-    else if (a == "--health-period" && i + 1 < argc)
-      options.health_period_s = std::atof(argv[++i]);
-    else if (a == "--quiet")
-      options.log_health = false;
-    else if (a == "--insecure")
-      insecure = true;
-    else if (a == "--realtime" && i + 1 < argc) {
-      realtime_priority = std::atoi(argv[++i]);
-      if (realtime_priority < mocap::kMinRealtimePriority ||
-          realtime_priority > mocap::kMaxRealtimePriority)
-        return std::cerr << "mocapd: --realtime " << argv[i] << ": a priority from 1 to 99\n", 2;
-    } else
-      return std::cerr << "mocapd: unknown argument " << a << "\n", 2;
-  }
+  if (!ParseArguments(argc, argv, &options, &realtime_priority, &insecure)) return 2;
   std::string error;
   mocap::Session session;
   if (!mocap::LoadSession(argv[1], &session, &error))

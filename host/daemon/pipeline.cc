@@ -67,6 +67,7 @@ std::vector<SolvedFrame> HostPipeline::SolveFrames(std::vector<SyncedFrame> fram
   for (SyncedFrame& f : frames) {
     ApplyCalibrations(f.time_ns);
     const SolveResult r = step_.Solve(&f.observations);
+    frames_failed_ += r.status == SolveStatus::kFailed;
     out.push_back({EncodePoseFrame(f.observations, r, f.time_ns, frames_solved_++,
                                    session_.skeleton, session_.rig, session_.imus),
                    f.last_input_ns});
@@ -84,6 +85,7 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   in.calibrations = calibrations_.counts();
   in.calibration_active = step_.any_imu_calibrated();
   in.frames_solved = frames_solved_;
+  in.frames_failed = frames_failed_;
   v1::Health health = input_.monitor().Health(now_ns, in);
   edge_health_.AppendTo(now_ns, &health);
   return health;

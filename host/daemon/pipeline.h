@@ -78,6 +78,7 @@ class HostPipeline {
   CalibrationQueue calibrations_;
   EdgeHealth edge_health_;
   uint64_t frames_solved_ = 0;
+  uint64_t frames_failed_ = 0;  // refused by the solver (Health's frames_dropped)
 };
 
 }  // namespace mocap

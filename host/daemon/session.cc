@@ -26,6 +26,27 @@ bool CheckSessionKeys(const json& j, std::string* error) {
   return true;
 }
 
+// Streams are told apart by name on the wire (camera ids, sensor ids) and keypoints by index:
+// a repeated name or an empty layout would have its streams dropped while running.
+void CheckNames(const Session& s) {
+  const auto repeated = [](const std::vector<std::string>& names) -> std::string {
+    for (size_t i = 0; i < names.size(); ++i)
+      if (std::find(names.begin(), names.begin() + i, names[i]) != names.begin() + i)
+        return names[i];
+    return "";
+  };
+  std::vector<std::string> cameras, sensors;
+  for (const Camera& c : s.rig.cameras) cameras.push_back(c.name);
+  for (const ImuSite& imu : s.imus) sensors.push_back(imu.name);
+  if (const std::string name = repeated(cameras); !name.empty())
+    throw std::runtime_error("rig: two cameras are named '" + name +
+                             "' (camera ids on the wire must be unique)");
+  if (const std::string name = repeated(sensors); !name.empty())
+    throw std::runtime_error("imus: two IMUs are named '" + name +
+                             "' (sensor ids on the wire must be unique)");
+  if (s.layout.size() == 0) throw std::runtime_error("layout: no keypoints");
+}
+
 }  // namespace
 
 bool LoadSession(const std::string& path, Session* out, std::string* error) {
@@ -70,6 +91,7 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
         throw std::runtime_error(*error);
       s.curve = std::move(keys);
     }
+    CheckNames(s);
     *out = std::move(s);
     return true;
   } catch (const std::exception& e) {

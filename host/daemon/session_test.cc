@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "options_json.h"
@@ -74,6 +75,41 @@ TEST(Session, TheSyncKeysAreThoseDocumented) {
   EXPECT_EQ(keys, (std::vector<std::string>{"group_tolerance_ms", "max_wait_ms", "stale_after_ms",
                                             "imu_max_gap_ms", "imu_max_hold_ms", "imu_history_ms",
                                             "imu_only_rate_hz"}));
+}
+
+// A data file of the shipped set with `edit` applied, written to the test's folder.
+std::string Edited(const std::string& data_file, const std::string& out_name,
+                   const std::function<void(json*)>& edit) {
+  std::ifstream in(testing::DataPath(data_file));
+  json j = json::parse(in);
+  edit(&j);
+  const std::string path = ::testing::TempDir() + "/" + out_name;
+  std::ofstream(path) << j.dump();
+  return path;
+}
+
+TEST(Session, RepeatedNamesAndAnEmptyLayoutAreRefusedAtLoad) {
+  Rig twins = testing::MakeScene(2, "coco17").rig;
+  twins.cameras[1].name = twins.cameras[0].name;
+  std::ofstream(::testing::TempDir() + "/twins.json") << RigToJson(twins);
+  const std::string imus = Edited("imus13.json", "imus_twice.json", [](json* j) {
+    (*j)["imus"][1]["name"] = (*j)["imus"][0]["name"];
+  });
+  const std::string layout = Edited("layouts/coco17.json", "empty_layout.json",
+                                    [](json* j) { (*j)["keypoints"] = json::array(); });
+  const std::vector<std::pair<json, std::string>> cases = {
+      {{{"rig", ::testing::TempDir() + "/twins.json"}},
+       "rig: two cameras are named '" + twins.cameras[0].name + "'"},
+      {{{"imus", imus}}, "imus: two IMUs are named 'head'"},
+      {{{"layout", layout}}, "no keypoints"},
+  };
+  for (const auto& [extra, message] : cases) {
+    Session s;
+    std::string error;
+    EXPECT_FALSE(LoadSession(WriteSession(extra), &s, &error)) << extra.dump();
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+    EXPECT_NE(error.find("session.json: "), std::string::npos) << error;
+  }
 }
 
 }  // namespace

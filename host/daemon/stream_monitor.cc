@@ -86,8 +86,10 @@ void StreamMonitor::AddInputAndPose(const HealthInputs& in, v1::Health* h) {
   h->set_latency_p99_ms(Percentile(latencies_ms_, 0.99));
   latencies_ms_.clear();
   h->set_frames_solved(in.frames_solved);
-  // frames_dropped stays 0: the synchroniser hands over every frame it was given (a frame
-  // released with a stream missing is counted as the pose stream's "late").
+  // frames_dropped: the frames the solver refused (status FAILED: a failed optimisation, a pose
+  // no camera's view supports), published with the previous pose held. The synchroniser hands
+  // over every frame it was given (one released with a stream missing is the pose's "late").
+  h->set_frames_dropped(in.frames_failed);
   v1::StreamHealth* pose = h->add_streams();
   pose->set_stream("pose");
   pose->set_active(frames_in_period_ > 0);

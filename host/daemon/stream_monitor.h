@@ -25,6 +25,7 @@ struct HealthInputs {
   CalibrationCounts calibrations;
   bool calibration_active = false;  // any IMU is solved with
   uint64_t frames_solved = 0;       // since the start
+  uint64_t frames_failed = 0;       // of those, refused by the solver (status FAILED)
 };
 
 class StreamMonitor {

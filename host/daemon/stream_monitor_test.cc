@@ -39,7 +39,8 @@ TEST(StreamMonitor, HealthReportsEachStreamOverThePeriod) {
   in.calibrations = {2, 3, 4};
   in.calibration_active = true;
   in.frames_solved = 7;
-  m.Health(t0, in);  // starts the period
+  in.frames_failed = 2;  // poses the solver refused
+  m.Health(t0, in);      // starts the period
   for (int k = 0; k < 50; ++k) {
     if (k != 20) m.camera(0).Count(k, 0, t0 + k * kMs, t0 + k * kMs);  // frame 20 lost
   }
@@ -67,6 +68,7 @@ TEST(StreamMonitor, HealthReportsEachStreamOverThePeriod) {
   EXPECT_EQ(Stream(h, "input").malformed(), 1u);
   EXPECT_NEAR(Stream(h, "pose").rate_hz(), 10.0, 1e-9);
   EXPECT_EQ(Stream(h, "pose").received(), 7u);
+  EXPECT_EQ(h.frames_dropped(), 2u);
   EXPECT_EQ(h.latency_p50_ms(), 4.0);
   // The next period starts anew.
   const v1::Health next = m.Health(t0 + 1000 * kMs, in);

@@ -1,5 +1,6 @@
 #include "mocap/camera.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "json_util.h"
@@ -48,6 +49,40 @@ Eigen::Vector2d Camera::Undistort(const Eigen::Vector2d& pixel) const {
   return {u, v};
 }
 
+namespace {
+
+// A calibration's distortion is refused when, over the image (radii 0 to its farthest corner,
+// normalised), the radial factor leaves [kMinRadial, kMaxRadial] or r * factor stops growing
+// (the lens would fold two rays onto one pixel, and Undistort's iteration diverges), or when
+// a tangential coefficient exceeds kMaxTangential. Why these: calibrated pinhole lenses, wide
+// ones included, keep the factor within 0.7-1.3 at the corner and |p| near 1e-3; a factor off
+// by 2 is a fisheye (refused) or a wrong unit, and a k1 of 1e6 moves a pixel by metres.
+constexpr double kMinRadial = 0.5, kMaxRadial = 2.0, kMaxTangential = 0.05;
+constexpr int kRadiusSamples = 64;
+
+bool DistortionIsPlausible(const Camera& c, std::string* why) {
+  const auto& [k1, k2, p1, p2, k3] = c.distortion;
+  if (std::abs(p1) > kMaxTangential || std::abs(p2) > kMaxTangential)
+    return *why = "a tangential coefficient beyond 0.05", false;
+  const double du = std::max(c.cx, c.width - c.cx) / c.fx;
+  const double dv = std::max(c.cy, c.height - c.cy) / c.fy;
+  const double corner = std::sqrt(du * du + dv * dv);
+  double last = 0;
+  for (int i = 1; i <= kRadiusSamples; ++i) {
+    const double r = corner * i / kRadiusSamples, r2 = r * r;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    if (!(radial >= kMinRadial && radial <= kMaxRadial))
+      return *why = "a radial factor of " + std::to_string(radial) + " at normalised radius " +
+                    std::to_string(r) + " (allowed 0.5 to 2 over the image)",
+             false;
+    if (!(r * radial > last)) return *why = "the image folds (r * radial factor decreases)", false;
+    last = r * radial;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool Camera::IsValid(std::string* error) const {
   if (!(fx > 0 && fy > 0 && std::isfinite(cx) && std::isfinite(cy))) {
     *error = "camera '" + name + "': focal lengths must be positive and the centre finite";
@@ -62,6 +97,11 @@ bool Camera::IsValid(std::string* error) const {
       *error = "camera '" + name + "': distortion must be finite";
       return false;
     }
+  }
+  std::string why;
+  if (!DistortionIsPlausible(*this, &why)) {
+    *error = "camera '" + name + "': implausible distortion (" + why + ")";
+    return false;
   }
   if (!rotation.allFinite() || !translation.allFinite() ||
       (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm() > 1e-6) {

@@ -81,5 +81,22 @@ TEST(Rig, JsonRoundTrips) {
   EXPECT_EQ(again.cameras[0].distortion[4], -0.01);
 }
 
+TEST(Camera, RefusesImplausibleDistortion) {
+  std::string error;
+  Camera c = TestCamera();
+  ASSERT_TRUE(c.IsValid(&error)) << error;
+  c.distortion = {-0.3, 0.1, 0.0, 0.0, 0.0};  // a wide-angle lens: kept
+  EXPECT_TRUE(c.IsValid(&error)) << error;
+  c.distortion = {1e6, 0, 0, 0, 0};  // moved pixels by metres, unnoticed, before the check
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_NE(error.find("camera 'c': implausible distortion (a radial factor"), std::string::npos)
+      << error;
+  c.distortion = {-1.5, 0, 0, 0, 0};  // r (1 - 1.5 r^2) turns back inside the image
+  EXPECT_FALSE(c.IsValid(&error));
+  c.distortion = {-0.2, 0.08, 0.2, 0, 0};
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_NE(error.find("tangential"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace mocap

@@ -55,6 +55,23 @@ constexpr double kMaxPredictionShift = 0.2;
 // (3 parameters fewer, the motion terms in their bones' groups: the solver benchmark's eight
 // cameras, x ~ 0.5, 3.5%).
 constexpr double kNegligibleLoosening = 0.1;
+// A solved root farther than this (metres) from every camera is refused (status kFailed, the
+// previous pose held): cameras see a person within tens of metres, and a pose kilometres
+// away is a depth no view supports (a monocular guess, inputs on another clock).
+constexpr double kMaxCameraDistance = 100.0;
+
+// False, with the status and message in *result, when the rig has cameras and the root of
+// `theta` is beyond kMaxCameraDistance from all of them.
+bool WithinReach(const Rig& rig, const Eigen::VectorXd& theta, SolveResult* result) {
+  double nearest = INFINITY;
+  for (const Camera& c : rig.cameras)
+    nearest = std::min(nearest, (c.Center() - theta.head<3>()).norm());
+  if (rig.cameras.empty() || nearest <= kMaxCameraDistance) return true;
+  result->status = SolveStatus::kFailed;
+  result->message = "the solved pose is " + std::to_string(static_cast<int>(nearest)) +
+                    " m from the nearest camera (more than 100 m: no view supports it)";
+  return false;
+}
 
 // The layout's and the IMU sites' bones are the skeleton's.
 bool CheckSites(const Skeleton& skeleton, const KeypointLayout& layout,
@@ -353,7 +370,8 @@ SolveResult Solver::Solve(const FrameObservations& frame) {
   const bool reacquiring = !initialising && !clean.detections.empty() && !history_.empty() &&
                            !history_.back().position_constrained;
   Continuity continuity = Continuity::kContinuous;
-  if (!SolvePasses(clean, frame.timestamp, initialising, reacquiring, &x, &result, &continuity))
+  if (!SolvePasses(clean, frame.timestamp, initialising, reacquiring, &x, &result, &continuity) ||
+      !WithinReach(rig_, x, &result))
     return finish(result.status, result.message);
   theta_ = x;
   initialised_ = true;

@@ -357,5 +357,34 @@ TEST(Solver, RejectsInconsistentConfiguration) {
   EXPECT_FALSE(solver->SetOptions(negative_time, &error));
 }
 
+// Cameras 400 times as far from the person, aimed at it with 400 times the focal length, see
+// it as large as before: the pose they give, kilometres from them, is refused and the
+// previous one held.
+TEST(Solver, RefusesAPoseKilometresFromEveryCamera) {
+  testing::Scene scene = testing::MakeScene(8);
+  std::mt19937 rng(6);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const Eigen::Vector3d root = truth.head<3>();
+  for (Camera& c : scene.rig.cameras) {
+    const Eigen::Vector3d far = root + 400.0 * (c.Center() - root);
+    const Eigen::Vector3d z = (root - far).normalized();  // OpenCV: x right, y down, z forward
+    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+    c.rotation << x.transpose(), z.cross(x).transpose(), z.transpose();
+    c.translation = -c.rotation * far;
+    c.fx *= 400.0;
+    c.fy *= 400.0;
+  }
+  auto solver = MakeSolver(scene, std::nullopt);
+  FrameObservations f = testing::Render(scene, truth, 0.0);
+  f.imus.clear();
+  ASSERT_FALSE(f.cameras.empty());
+  const SolveResult r = solver->Solve(f);
+  EXPECT_EQ(r.status, SolveStatus::kFailed) << r.message;
+  EXPECT_NE(r.message.find("m from the nearest camera (more than 100 m"), std::string::npos)
+      << r.message;
+  EXPECT_FALSE(solver->initialised());
+  EXPECT_GT(r.theta.size(), 0);
+}
+
 }  // namespace
 }  // namespace mocap

@@ -42,7 +42,8 @@ enum class SolveStatus {
   kInitialised,     // first frame (or after a reset): solved from an initial guess
   kNoObservations,  // nothing usable in the frame: the previous pose is held
   kRejectedFrame,   // timestamp not finite or not after the previous frame
-  kFailed,          // the optimiser failed: the previous pose is held
+  kFailed,          // the optimiser failed, or the pose is over 100 m from every camera
+                    // (refused): the previous pose is held
 };
 const char* ToString(SolveStatus status);
 

@@ -47,3 +47,22 @@ def test_refuses_fisheye_and_malformed(tmp_path):
     path.write_text("[cam")
     with pytest.raises(InputError):
         calib_toml.load(path)
+
+
+@pytest.mark.parametrize("distortions, why", [
+    ("[1e6, 0.0, 0.0, 0.0]", "a radial factor of"),  # pixels moved by metres, once used as given
+    ("[-1.5, 0.0, 0.0, 0.0]", ""),  # the image folds back on itself inside the frame
+    ("[-0.05, 0.02, 0.3, 0.0]", "tangential")])
+def test_refuses_implausible_distortion(tmp_path, distortions, why):
+    path = tmp_path / "Calib.toml"
+    path.write_text(CALIB.replace("[ -0.05, 0.02, 0.001, -0.002]", distortions))
+    with pytest.raises(InputError, match=rf"^{path}: camera 'cam_01': implausible distortion \(.*{why}"):
+        calib_toml.load(path)
+
+
+def test_refuses_two_tables_of_one_name(tmp_path):
+    path = tmp_path / "Calib.toml"
+    path.write_text(CALIB.replace("[metadata]", CALIB.split("[metadata]")[0].replace("[cam_01]", "[cam_02]")
+                                  + "[metadata]"))
+    with pytest.raises(InputError, match="two camera tables are named 'cam_01'"):
+        calib_toml.load(path)

@@ -190,3 +190,24 @@ def test_cli_replay_of_a_file_that_is_not_mcap_is_an_error(tmp_path, capsys):
     bad.write_bytes(b"not an mcap file")
     assert cli.main(["replay", str(bad), "--bind", free_tcp_endpoint(), "--max-speed"]) == 2
     assert "not an MCAP file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["/etc/passwd", "../skeleton.json", "missing.json"])
+def test_an_attached_session_may_name_only_its_attachments(tmp_path, name):
+    import json
+
+    from mocap.errors import InputError
+
+    session = {"format": "mocap.session/1", "skeleton": name, "rig": "rig.json", "layout": "layout.json",
+               "imus": "imus.json", "inputs": ["tcp://127.0.0.1:5600"], "output": "tcp://*:5700"}
+    path = tmp_path / "crafted.mcap"
+    with recorder.Recorder(path) as r:
+        for key in ("skeleton", "rig", "layout", "imus"):
+            r._attach(f"session/{key}.json", b"{}")
+        r._attach("session/session.json", json.dumps(session).encode())
+    (tmp_path / "out").mkdir()
+    with reader.Recording(path) as recording, pytest.raises(InputError) as e:
+        recording.session(tmp_path / "out")
+    assert str(e.value) == (f"{path}: the attached session names skeleton {name!r}, which is not one of its "
+                            "attachments; give the session with --session")
+    assert "root:" not in str(e.value)

@@ -1,4 +1,5 @@
 import json
+import os
 import shutil
 
 import numpy as np
@@ -248,3 +249,62 @@ def test_world_up_units_and_layout_are_checked(take_dir):
 def test_image_size_is_checked(take_dir, size, message):
     _edit(take_dir / "take.toml", "image_size = [1920, 1080]", f"image_size = {size}")
     _raises(take_dir, take_dir / "take.toml", 12, match=message)
+
+
+@pytest.mark.parametrize("where", ["absolute", "dotdot", "symlink"])
+def test_paths_out_of_the_take_folder_are_refused(take_dir, tmp_path, where):
+    outside = tmp_path / "elsewhere"
+    shutil.copytree(take_dir / "pose" / "cam2", outside)
+    name = {"absolute": str(outside), "dotdot": "../elsewhere", "symlink": "pose/link"}[where]
+    if where == "symlink":
+        (take_dir / "pose" / "link").symlink_to(outside)
+    _edit(take_dir / "take.toml", '"pose/cam2"', f'"{name}"')
+    _raises(take_dir, take_dir / "take.toml", 10, match="pose folder .* is outside the take folder")
+
+
+def test_an_imu_file_out_of_the_folder_is_refused_without_echoing_it(take_dir, tmp_path):
+    secret = tmp_path / "secret.csv"
+    secret.write_text("root:x:0:0:root:/root:/bin/bash\n")
+    for file in (str(secret), "../secret.csv"):
+        (take_dir / "sensors.csv").write_text(f"sensor,segment,file\nhead,head,{file}\n")
+        e = _raises(take_dir, take_dir / "sensors.csv", 2, 3, match="IMU file .* is outside the take folder")
+        assert "root:x" not in str(e)
+    (take_dir / "imu" / "link.csv").symlink_to(secret)  # inside by name, outside once resolved
+    (take_dir / "sensors.csv").write_text("sensor,segment,file\nhead,head,imu/link.csv\n")
+    assert "root:x" not in str(_raises(take_dir, take_dir / "sensors.csv", 2, 3, match="outside the take folder"))
+    _edit(take_dir / "take.toml", 'sensors = "sensors.csv"', f'sensors = "{secret}"')
+    _raises(take_dir, take_dir / "take.toml", match=r"\[imu\] sensors .* is outside")
+
+
+@pytest.mark.parametrize("file", ["take.toml", "Calib.toml", "sensors.csv", "imu/head.csv",
+                                  "pose/cam2/cam2_000000000003_keypoints.json"])
+def test_a_fifo_is_refused_without_blocking(take_dir, file):
+    path = take_dir / file
+    path.unlink()
+    os.mkfifo(path)  # opening it for reading would wait for a writer forever
+    with pytest.raises(TakeError, match="is not a regular file") as e:
+        take_folder.read_take(take_dir)
+    assert str(e.value).startswith(str(take_dir))
+
+
+def test_repeated_cameras_and_pose_folders_are_refused(take_dir):
+    _edit(take_dir / "take.toml", '"cam2", "cam4"', '"cam2", "cam2"')
+    _raises(take_dir, take_dir / "take.toml", 9, match="camera_names: 'cam2' is named twice")
+    _edit(take_dir / "take.toml", '"cam2", "cam2"', '"cam2", "cam4"')
+    _edit(take_dir / "take.toml", '"pose/cam2", "pose/cam4"', '"pose/cam2", "pose/./cam2"')
+    _raises(take_dir, take_dir / "take.toml", 10, match="pose_dirs: 'pose/./cam2' is named twice")
+
+
+def test_two_calibration_tables_of_one_name_are_refused(take_dir):
+    calib = (take_dir / "Calib.toml").read_text()
+    _edit(take_dir / "Calib.toml", 'name = "cam4"', 'name = "cam2"')
+    _raises(take_dir, take_dir / "Calib.toml", match="two camera tables are named 'cam2'")
+    (take_dir / "Calib.toml").write_text(calib)
+    _edit(take_dir / "Calib.toml", 'name = "cam0"', 'name = "cam_02"')  # [cam_01]'s name, [cam_02]'s key
+    _edit(take_dir / "take.toml", '"cam0"', '"cam_02"')
+    _raises(take_dir, take_dir / "Calib.toml", match="'cam_02' is ambiguous")
+
+
+def test_a_take_toml_of_random_bytes_is_refused_by_name(take_dir):
+    (take_dir / "take.toml").write_bytes(bytes(range(256)) * 4)
+    _raises(take_dir, take_dir / "take.toml", match="not UTF-8 text")

@@ -103,6 +103,17 @@ def synchronised(messages: list[tuple[int, str, bytes]], session: Path, where: s
 
 def estimate(messages: Iterable[tuple[int, str, bytes]], session: Path, seconds: float, where: str,
              quick: bool = False, video_if_still: bool = False) -> Estimated:
+    """_estimate; a numerical failure of it ("SVD did not converge": values that overflow) is
+    an InputError naming `where`, not a message naming nothing."""
+    try:
+        return _estimate(messages, session, seconds, where, quick, video_if_still)
+    except np.linalg.LinAlgError as e:
+        raise InputError(f"{where}: the calibration from it failed numerically ({e}); look for extreme values "
+                         "in its calibration (Calib.toml, rig), keypoints and IMU samples") from None
+
+
+def _estimate(messages: Iterable[tuple[int, str, bytes]], session: Path, seconds: float, where: str,
+              quick: bool = False, video_if_still: bool = False) -> Estimated:
     """The calibration of `session`'s subject from (arrival ns, type name, payload) messages
     of its cameras and IMU hubs in arrival order (a recording, the live calibrator's last
     seconds, a take folder's), synchronised as mocapd synchronises them; InputError when they

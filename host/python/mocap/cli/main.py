@@ -4,6 +4,7 @@ subcommand (each `register`s its parser and `run`s it)."""
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import sys
 
@@ -32,9 +33,22 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO, format="%(levelname)s %(message)s")
     try:
         return args.func(args)
-    except (MocapError, EdgeError, OSError, ValueError) as e:
+    except OSError as e:  # a file or a device: a message naming it, no traceback
+        print(f"mocap {args.command}: {describe_os_error(e, getattr(args, 'out', None))}", file=sys.stderr)
+        return 2
+    except (MocapError, EdgeError, ValueError) as e:  # bad input, named by the raiser
         print(f"mocap {args.command}: {e}", file=sys.stderr)
         return 2
+
+
+def describe_os_error(e: OSError, out: str | None) -> str:
+    """The file and the problem: an error of writing names no file (a full disk is found at a
+    write or a close), so it is said to be about the command's output, `out`, when it has one."""
+    if e.filename is not None:
+        return f"{e.filename}: {e.strerror or e}"
+    if out is not None and e.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO):
+        return f"{out}: writing the output failed ({e.strerror}); what was written is incomplete"
+    return str(e)
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import tempfile
 from pathlib import Path
 
@@ -50,9 +51,13 @@ def run(args: argparse.Namespace) -> int:
             raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
         poses, dropped, skeleton = offline.solve_recording(recording, session)
     integrity = recording.integrity
+    clock = (f"; {dropped['clock_offset']} inputs' times are not on their arrival's clock (recorded from a replay "
+             "without --restamp?)") if dropped.get("clock_offset") else ""
     if not poses:
         raise InputError(f"{args.recording}: no frame could be solved (dropped inputs: {dropped}; the recording: "
-                         f"{integrity.describe()})")
+                         f"{integrity.describe()}){clock}")
+    if clock:
+        print(f"mocap solve: warning: {args.recording}{clock}", file=sys.stderr)
     thetas = np.array([list(p.theta) for p in poses])
     write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))  # the latest calibration's skeleton
     if args.csv:  # the bones as solved, each frame with the calibration in use then

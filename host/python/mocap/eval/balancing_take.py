@@ -5,6 +5,7 @@ and the comparison of a solve of it with Pose2Sim's own triangulated TRC."""
 from __future__ import annotations
 
 import csv
+import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -26,12 +27,15 @@ MARKERS = {"head": "Neck", "left_shoulder": "LShoulder", "right_shoulder": "RSho
 
 
 def write(trial: Path, folder: Path) -> Path:
-    """A take folder referring to the trial's files (take.toml only)."""
+    """A take folder of the trial's files (copied in: a take reads nothing outside its folder)."""
     folder.mkdir(parents=True, exist_ok=True)
-    poses = ", ".join(f'"{trial / "pose" / f"cam{c}_json"}"' for c in range(1, 5))
+    shutil.copyfile(trial / "Calib_qualisys.toml", folder / "Calib_qualisys.toml")
+    for c in range(1, 5):
+        shutil.copytree(trial / "pose" / f"cam{c}_json", folder / "pose" / f"cam{c}_json", dirs_exist_ok=True)
+    poses = ", ".join(f'"pose/cam{c}_json"' for c in range(1, 5))
     (folder / "take.toml").write_text(
         "[take]\nframe_rate = 60\nn_frames = 100\nworld_up_axis = \"Z\"\nunits = \"m\"\n\n"
-        f"[video]\ncalibration = \"{trial / 'Calib_qualisys.toml'}\"\n"
+        "[video]\ncalibration = \"Calib_qualisys.toml\"\n"
         "camera_names = [\"cam_01\", \"cam_02\", \"cam_03\", \"cam_04\"]\n"
         f"pose_dirs = [{poses}]\nkeypoint_layout = \"BODY_25B\"\n")
     return folder

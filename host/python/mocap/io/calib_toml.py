@@ -42,16 +42,25 @@ def _camera(key: str, table: dict) -> _core.Camera:
 
 
 def load(path: str | Path) -> _core.Rig:
+    if not Path(path).is_file():  # a FIFO would block the read
+        raise InputError(f"{path}: not found or not a regular file")
     try:
         data = tomllib.loads(Path(path).read_text())
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"{path}: {e}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise InputError(f"{path}: not a TOML file ({e})") from None
     cams = [_camera(key, t) for key, t in data.items() if key != "metadata" and isinstance(t, dict)]
     if not cams:
         raise InputError(f"{path}: no camera tables")
-    # Round-trip through the rig parser, which validates every camera.
-    rig = _core.Rig(cams)
-    return _core.Rig.from_json(rig.to_json())
+    names = [c.name for c in cams]
+    twice = [n for i, n in enumerate(names) if n in names[:i]]
+    if twice:  # which one a take means would be a guess
+        raise InputError(f"{path}: two camera tables are named {twice[0]!r}")
+    # Round-trip through the rig parser, which validates every camera (distortion included:
+    # mocap/camera.h, Camera::IsValid).
+    try:
+        return _core.Rig.from_json(_core.Rig(cams).to_json())
+    except ValueError as e:
+        raise InputError(f"{path}: {e}") from None
 
 
 def _floats(values) -> str:

@@ -208,10 +208,12 @@ class Session:
     @classmethod
     def load(cls, path: str | Path) -> Session:
         path = Path(path)
+        if not path.is_file():  # missing, a folder, or a FIFO (whose read would block)
+            raise InputError(f"{path}: not found or not a regular file")
         try:
             data = json.loads(path.read_text())
-        except json.JSONDecodeError as e:
-            raise InputError(f"{path}: not JSON ({e})") from None
+        except (json.JSONDecodeError, UnicodeDecodeError) as e:
+            raise InputError(f"{path}: not a JSON session file ({e})") from None
         return cls.from_json(data, path.parent, str(path))
 
     def _check(self, where: str) -> None:

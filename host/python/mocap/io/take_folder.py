@@ -6,7 +6,9 @@
     sensors.csv    sensor, segment, file; one Xsens MT Manager CSV per IMU (mocap.io.xsens_csv)
 
 `read_take` checks everything and raises TakeError (an InputError) naming the file, and
-the line and column where there is one; `write_take` writes the same format. In memory the
+the line and column where there is one; every path it follows must stay inside the take
+folder once resolved (symlinks too) and name a regular file or folder, so that a take
+never reads a file of the host's (nor echoes one in an error) and a FIFO never blocks it; `write_take` writes the same format. In memory the
 world is ours (Z up): a Y-up take's calibration world is rotated by WORLD_FROM_Y_UP.
 """
 
@@ -14,7 +16,9 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
+import stat
 import tomllib
 from pathlib import Path
 
@@ -70,11 +74,14 @@ class _Toml:
 
     def __init__(self, path: Path):
         self.path = path
+        regular_file(path, path)
         try:
             self.text = path.read_text()
             self.data = tomllib.loads(self.text)
         except OSError as e:
             raise TakeError(path, f"cannot read: {e.strerror or e}") from None
+        except UnicodeDecodeError as e:
+            raise TakeError(path, f"not UTF-8 text (byte {e.start}): not a TOML file") from None
         except tomllib.TOMLDecodeError as e:
             raise TakeError(path, str(e)) from None
 
@@ -101,6 +108,11 @@ class _Toml:
             raise self.error(name, None, "is not a table")
         return t
 
+    def path_of(self, folder: Path, table: str, key: str) -> Path:
+        """The path under `[table] key`, refused when it leaves the take folder."""
+        return inside(folder, self.get(table, key, str, what="a path"), self.path, f"[{table}] {key}",
+                      self.line(table, key))
+
     def get(self, table: str, key: str, kind, check=lambda v: True, what: str = ""):
         t = self.data[table]
         if key not in t:
@@ -110,6 +122,34 @@ class _Toml:
         if not ok:
             raise self.error(table, key, f"{value!r} is not {what or kind}")
         return value
+
+
+def regular_file(path: Path, where: Path, what: str = "file", line: int | None = None,
+                 column: int | None = None, folder: bool = False) -> Path:
+    """`path` when it is a regular file (a folder with `folder`); a TakeError at `where`
+    otherwise, before anything opens it (a FIFO or a device would block or never end)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        raise TakeError(where, f"{what} {str(path)!r} not found ({e.strerror})", line, column) from None
+    kind = stat.S_ISDIR(mode) if folder else stat.S_ISREG(mode)
+    if not kind:
+        raise TakeError(where, f"{what} {str(path)!r} is not a {'folder' if folder else 'regular file'}", line, column)
+    return path
+
+
+def inside(root: Path, name: str, where: Path, what: str, line: int | None = None,
+           column: int | None = None) -> Path:
+    """`name` relative to the folder of `where` (the file naming it), refused when it leaves the
+    take folder `root` once resolved: an absolute path, `..`, or a symlink pointing out."""
+    path = where.parent / name
+    try:
+        resolved, top = path.resolve(), root.resolve()
+    except (OSError, RuntimeError) as e:  # a symlink loop
+        raise TakeError(where, f"{what} {name!r}: cannot be resolved ({e})", line, column) from None
+    if not resolved.is_relative_to(top):
+        raise TakeError(where, f"{what} {name!r} is outside the take folder (paths stay inside it)", line, column)
+    return path
 
 
 def _positive(v) -> bool:
@@ -123,7 +163,7 @@ def _strings(v) -> bool:
 def read_take(folder: str | Path) -> TakeFolder:
     """The take in `folder`, checked; TakeError at the first fault."""
     folder = Path(folder)
-    toml = _Toml(folder / "take.toml")
+    toml = _Toml(inside(folder, "take.toml", folder / "take.toml", "take.toml"))
     toml.table("take", True)
     rate = float(toml.get("take", "frame_rate", (int, float), _positive, "a positive number"))
     n_frames = toml.get("take", "n_frames", int, _positive, "a positive integer")
@@ -142,10 +182,16 @@ def read_take(folder: str | Path) -> TakeFolder:
 
 
 def _read_video(folder: Path, toml: _Toml, n_frames: int, world_from_take: np.ndarray):
-    calib = folder / toml.get("video", "calibration", str, what="a path")
+    calib = toml.path_of(folder, "video", "calibration")
     names = toml.get("video", "camera_names", list, lambda v: len(v) > 0 and _strings(v), "a list of names")
     dirs = toml.get("video", "pose_dirs", list, lambda v: len(v) == len(names) and _strings(v),
                     f"a list of {len(names)} folders (one per camera_names)")
+    line = toml.line("video", "pose_dirs")
+    paths = [inside(folder, d, toml.path, "pose folder", line) for d in dirs]
+    for key, written, values in (("camera_names", names, names), ("pose_dirs", dirs, [p.resolve() for p in paths])):
+        twice = [i for i, v in enumerate(values) if v in values[:i]]
+        if twice:
+            raise toml.error("video", key, f"{written[twice[0]]!r} is named twice (each camera once, its own folder)")
     layout = LAYOUTS.get(toml.get("video", "keypoint_layout", str, lambda v: v in LAYOUTS, " or ".join(LAYOUTS)))
     rig = _rig(calib, names, world_from_take)
     size = None
@@ -156,30 +202,31 @@ def _read_video(folder: Path, toml: _Toml, n_frames: int, world_from_take: np.nd
         if list(size) != [cam.width, cam.height]:
             raise toml.error("video", "image_size", f"{size} but {calib.name} gives {cam.name} "
                              f"{cam.width} x {cam.height}")
-    people = [_read_poses(folder / d, toml, n_frames, KEYPOINTS[layout]) for d in dirs]
+    people = [_read_poses(folder, p, n_frames, KEYPOINTS[layout]) for p in paths]
     return rig, layout, people
 
 
 def _rig(calib: Path, names: list[str], world_from_take: np.ndarray) -> _core.Rig:
-    if not calib.is_file():
-        raise TakeError(calib, "calibration file not found")
+    regular_file(calib, calib, "calibration file")
     try:
         data = tomllib.loads(calib.read_text())
         rig = calib_toml.load(calib)
-    except tomllib.TOMLDecodeError as e:
-        raise TakeError(calib, str(e)) from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        raise TakeError(calib, f"not a TOML file ({e})") from None
     except InputError as e:
         raise TakeError(calib, str(e).removeprefix(f"{calib}: ")) from None
     keys = [k for k, t in data.items() if k != "metadata" and isinstance(t, dict)]
-    by_name = {}
-    for key, cam in zip(keys, rig.cameras):
-        by_name[cam.name] = by_name[key] = cam
+    cameras = rig.cameras
     cams = []
     for name in names:
-        if name not in by_name:
+        found = [i for i, (key, cam) in enumerate(zip(keys, cameras)) if name in (key, cam.name)]
+        if not found:
             raise TakeError(calib, f"no camera {name!r} (take.toml camera_names); it has "
-                            f"{', '.join(c.name for c in rig.cameras)}")
-        cam = by_name[name]
+                            f"{', '.join(c.name for c in cameras)}")
+        if len(found) > 1:
+            raise TakeError(calib, f"camera {name!r} is ambiguous: tables [{keys[found[0]]}] and "
+                            f"[{keys[found[1]]}] both answer to it (a key and a name)")
+        cam = cameras[found[0]]
         cam.name = name
         cam.rotation = np.asarray(cam.rotation) @ world_from_take.T  # x_cam = R p_take + t = R A^T p_ours + t
         cams.append(cam)
@@ -190,12 +237,14 @@ def _frame_order(path: Path) -> list:
     return [int(p) if p.isdigit() else p for p in re.split(r"(\d+)", path.name)]
 
 
-def _read_poses(pose_dir: Path, toml: _Toml, n_frames: int, n_keypoints: int) -> list[np.ndarray]:
+def _read_poses(folder: Path, pose_dir: Path, n_frames: int, n_keypoints: int) -> list[np.ndarray]:
     if not pose_dir.is_dir():
         raise TakeError(pose_dir, "pose folder not found (take.toml [video] pose_dirs)")
     files = sorted(pose_dir.glob("*.json"), key=_frame_order)
     if len(files) != n_frames:
         raise TakeError(pose_dir, f"{len(files)} JSON files, but take.toml says n_frames = {n_frames}")
+    for f in files:  # a symlink out of the folder, a FIFO: refused before reading
+        regular_file(inside(folder, f.name, f, "pose file"), f, "pose file")
     return [_read_pose(f, n_keypoints) for f in files]
 
 
@@ -224,7 +273,7 @@ def _read_pose(path: Path, n_keypoints: int) -> np.ndarray:
 
 
 def _read_imus(folder: Path, toml: _Toml, rate: float) -> list[ImuRecording]:
-    path = folder / toml.get("imu", "sensors", str, what="a path")
+    path = regular_file(toml.path_of(folder, "imu", "sensors"), toml.path, "[imu] sensors", toml.line("imu", "sensors"))
     table = xsens_csv.read_table(path)
     cols = table.index(["sensor", "segment", "file"])
     out, seen = [], set()
@@ -234,9 +283,8 @@ def _read_imus(folder: Path, toml: _Toml, rate: float) -> list[ImuRecording]:
             raise TakeError(path, f"sensor name {sensor!r} is empty or repeated", line, cols[0] + 1)
         if segment not in SEGMENT_BONES:
             raise TakeError(path, f"unknown segment {segment!r} (known: {', '.join(SEGMENT_BONES)})", line, cols[1] + 1)
-        if not (path.parent / file).is_file():
-            raise TakeError(path, f"IMU file {file!r} not found", line, cols[2] + 1)
-        s = xsens_csv.read_imu(path.parent / file, rate)
+        imu_path = inside(folder, file, path, "IMU file", line, cols[2] + 1)
+        s = xsens_csv.read_imu(regular_file(imu_path, path, "IMU file", line, cols[2] + 1), rate)
         out.append(ImuRecording(sensor, segment, SEGMENT_BONES[segment], s.times_s, s.quaternions, s.accelerations,
                                 s.packets))
         seen.add(sensor)

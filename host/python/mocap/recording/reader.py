@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from mocap.errors import InputError
+from mocap.io.session import FILES, Session
 from mocap.recording import mcap_scan
 
 log = logging.getLogger(__name__)
@@ -151,7 +152,19 @@ class Recording:
             target = Path(folder) / Path(a.name).name
             target.write_bytes(a.data)
             found = target if target.name == "session.json" else found
+        if found is not None:
+            self._check_session_files(found)
         return found
+
+    def _check_session_files(self, session: Path) -> None:
+        """The attached session may name only files attached beside it: a path elsewhere (absolute,
+        `..`) would have a recording read the host's own files."""
+        config = Session.load(session)
+        for key in FILES:
+            name = getattr(config, key)
+            if name is not None and (Path(name).name != name or not (session.parent / name).is_file()):
+                raise InputError(f"{self.path}: the attached session names {key} {name!r}, which is not one of "
+                                 "its attachments; give the session with --session")
 
     def close(self) -> None:
         self._mm.close()

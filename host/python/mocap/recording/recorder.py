@@ -42,6 +42,7 @@ from google.protobuf import descriptor_pb2
 from google.protobuf.message import Message
 from mcap.writer import Writer
 
+from mocap.errors import InputError
 from mocap.io.session import FILES, Session
 from mocap.net import transport, wire
 from mocap.net.keys import ClientKeys
@@ -195,6 +196,7 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
     tens of milliseconds now and then, and stamps taken after it would be that late — later
     than the host's synchroniser waits, so the recording solved again would drop camera frames
     the live host used."""
+    check_endpoints(endpoints)
     deadline = None if seconds is None else time.monotonic() + seconds
     stop = stop or threading.Event()
     received: queue.Queue = queue.Queue()
@@ -213,6 +215,18 @@ def record(endpoints: list[str], path: str | Path, seconds: float | None = None,
                 continue
             recorder.write(frames, stamp)
         return recorder.counts()
+
+
+def check_endpoints(endpoints: list[str]) -> None:
+    """InputError naming the first endpoint ZeroMQ cannot connect to (malformed, unknown
+    transport), before any file is made: the receiving thread would only print a traceback."""
+    with zmq.Context() as context, context.socket(zmq.SUB) as socket:
+        socket.setsockopt(zmq.LINGER, 0)
+        for endpoint in endpoints:
+            try:
+                socket.connect(endpoint)
+            except zmq.ZMQError as e:
+                raise InputError(f"{endpoint}: cannot connect ({zmq.strerror(e.errno)})") from None
 
 
 def _receive(endpoints: list[str], received: queue.Queue, stop: threading.Event, deadline: float | None,

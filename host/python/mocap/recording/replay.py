@@ -98,7 +98,11 @@ def _replay_socket(context: zmq.Context, endpoint: str, keys: ServerKeys | None)
     socket.setsockopt(zmq.SNDHWM, transport.PUBLISHER_HWM)
     socket.setsockopt(zmq.XPUB_NODROP, 1)
     socket.setsockopt(zmq.LINGER, REPLAY_LINGER_MS)
-    socket.bind(endpoint)
+    try:
+        socket.bind(endpoint)
+    except zmq.ZMQError as e:  # a port in use, a malformed endpoint
+        socket.close(0)
+        raise InputError(f"{endpoint}: cannot publish there ({zmq.strerror(e.errno)})") from None
     return socket
 
 
