@@ -47,7 +47,16 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
     if (c >= 0) monitor_.camera(c).invalid++;
     return monitor_.Drop(rejection.reason, rejection.detail, why);
   }
-  monitor_.camera(c).Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
+  StreamStats& stats = monitor_.camera(c);
+  stats.Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
+  if (!stats.clock.Check(frame.capture_time_ns(), now_ns)) {
+    return monitor_.Drop("clock_step",
+                         frame.camera_id() + " frame " + std::to_string(frame.frame_index()) +
+                             ": its time is " +
+                             std::to_string((now_ns - frame.capture_time_ns()) / 1'000'000) +
+                             " ms before its arrival, off the stream's clock",
+                         why);
+  }
   // Projecting the tracked pose is needed only to tell several persons apart.
   const bool track =
       tracker && tracker->initialised() && frame.detected() && frame.persons_size() > 1;
@@ -71,6 +80,10 @@ bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string*
       continue;
     }
     monitor_.imu(i).Count(s.packet_counter(), 1u << 16, s.sample_time_ns(), now_ns);
+    if (!monitor_.imu(i).clock.Check(s.sample_time_ns(), now_ns)) {
+      monitor_.CountDropped("clock_step");
+      continue;
+    }
     if (!sync_.AddImu(InputDecoder::ToImuInput(s, i), now_ns))
       monitor_.CountDropped("late_or_duplicate");
   }

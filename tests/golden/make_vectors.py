@@ -113,7 +113,8 @@ def stream_health(s: dict) -> bytes:
     return (text(1, s["stream"]) + vint(2, int(s.get("active", False))) + f64(3, s.get("rateHz", 0.0))
             + b"".join(vint(4 + i, int(s.get(c, 0))) for i, c in enumerate(["received", "dropped", "late", "duplicates",
                                                                          "malformed", "lost"]))
-            + f64(10, s.get("latencyP50Ms", 0.0)) + f64(11, s.get("latencyP99Ms", 0.0)))
+            + f64(10, s.get("latencyP50Ms", 0.0)) + f64(11, s.get("latencyP99Ms", 0.0))
+            + (vint(18, int(s["clockSteps"])) if "clockSteps" in s else b""))
 
 
 def health(m: dict) -> bytes:
@@ -166,6 +167,12 @@ VECTORS = {
                      "malformed": "1", "latencyP50Ms": 0.75, "latencyP99Ms": 2.5},
                     {"stream": "imu/pelvis", "rateHz": 0.0, "received": "100", "lost": "4"}],
         "latencyP50Ms": 1.25, "latencyP99Ms": 3.5, "framesSolved": "3600", "framesDropped": "1"}, None),
+    # A camera whose clock stepped away and back (a PTP loss), its frames refused meanwhile.
+    "health_clock_steps": ("mocap.v1.Health", {
+        "source": "host", "timeNs": "1763900002000000000",
+        "streams": [{"stream": "camera/cam2", "active": True, "rateHz": 60.0, "received": "7200", "dropped": "61",
+                     "latencyP50Ms": 6.5, "latencyP99Ms": 9.25, "clockSteps": "2"}],
+        "framesSolved": "7200"}, None),
     "calibration": ("mocap.v1.Calibration", {
         "source": "calibrator", "sequence": "2", "validFromNs": "1763900012000000000",
         "skeletonJson": '{"format": "mocap.skeleton/1", "bones": []}',
