@@ -50,11 +50,11 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
   StreamStats& stats = monitor_.camera(c);
   stats.Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
   if (!stats.clock.Check(frame.capture_time_ns(), now_ns)) {
+    const int64_t ms = (now_ns - frame.capture_time_ns()) / 1'000'000;
     return monitor_.Drop("clock_step",
                          frame.camera_id() + " frame " + std::to_string(frame.frame_index()) +
-                             ": its time is " +
-                             std::to_string((now_ns - frame.capture_time_ns()) / 1'000'000) +
-                             " ms before its arrival, off the stream's clock",
+                             " arrived " + std::to_string(ms < 0 ? -ms : ms) + " ms " +
+                             (ms < 0 ? "before" : "after") + " its time: its clock is off",
                          why);
   }
   // Projecting the tracked pose is needed only to tell several persons apart.
