@@ -99,8 +99,11 @@ def edge(s: Studio, folder: Path) -> dict:
         hub = _kill_and_restart(live, "hub", f"imu/{SENSOR}", lambda p: len(p.imus) + len(p.imus_distrusted) == 13)
         _until_take(live, live.take_s(hub["restarted_ns"]) + 1.5)
     kept = recording_check.check(folder / "take.mcap", s, live.start_ns, {CAMERA: camera, "hub0": hub})
-    return {"drill": "edge", "camera": {**camera, **_continuity(live, camera["killed_ns"])},
-            "hub": {**hub, **_continuity(live, hub["killed_ns"])}, "recording": kept}
+    last = {x.stream: x for x in live.healths()[-1].message.streams}  # the gaps as Health counts them
+    return {"drill": "edge", "camera": {**camera, **_continuity(live, camera["killed_ns"]),
+                                        "health_lost": last[f"camera/{CAMERA}"].lost},
+            "hub": {**hub, **_continuity(live, hub["killed_ns"]), "health_lost": last[f"imu/{SENSOR}"].lost},
+            "recording": kept}
 
 
 def host(s: Studio, folder: Path) -> dict:
