@@ -38,9 +38,10 @@ class NodeOscillator:
             step_s = self.STEP_NS * 1e-9
             self._node_us.append(self._node_us[-1] + step_s * 1e6 * (1 + self._ppm[-1] * 1e-6))
             self._ppm.append(self._ppm[-1] + self.walk * np.sqrt(step_s) * self.rng.normal())
-        if len(self._node_us) > 2 * self._keep:  # let the oldest half go
-            del self._node_us[:self._keep], self._ppm[:self._keep]
-            self._first += self._keep
+        if len(self._node_us) > 2 * self._keep:  # let go of all but the last KEEP_S
+            drop = len(self._node_us) - self._keep
+            del self._node_us[:drop], self._ppm[:drop]
+            self._first += drop
         j = k - self._first
         frac = (t_ns - k * self.STEP_NS) / self.STEP_NS
         return self._node_us[j] + frac * (self._node_us[j + 1] - self._node_us[j])
