@@ -24,11 +24,11 @@ def test_a_killed_camera_box_and_imu_hub_leave_the_solve_going_and_rejoin(studio
         assert d[part]["extra_delay_s"] < 0.035 + 2 * drill.PERIOD_S, d
         assert d[part]["rejoin_s"] <= 1.0, d  # from the restart to a pose with the stream
         assert d[part]["reported_inactive_after_s"] <= 1.5, d  # Health's period is 1 s
-    # Health counts the frames and samples the gap lacks (the sender's counters; the IMU's
-    # node ran on while its hub was down), as many as the recording lacks, give or take what
-    # mocapd and the recorder each received before they reconnected.
+    # Health counts the frames the camera's gap lacks (the box numbers them by the take), as
+    # many as the recording lacks, give or take what mocapd and the recorder each received
+    # before they reconnected. (A restarted hub numbers its samples afresh: a restart for
+    # Health, not a loss; the gap shows as the IMUs inactive.)
     assert d["camera"]["health_lost"] >= 0.8 * 60 * d["recording"][drill.CAMERA]["gap_s"], d
-    assert d["hub"]["health_lost"] >= 0.8 * 100 * (d["recording"]["hub0_gap_s"] - 0.1), d
     kept = d["recording"]
     assert all(n == 0 for n in kept["lost"].values()), kept
     assert kept[drill.CAMERA]["in_flight_at_kill"] <= 2, kept

@@ -26,15 +26,15 @@ from mocap.demo.score import score
 from mocap.demo.studio import Studio, prepare
 from mocap.net import wire
 
-SECONDS = 12.0  # of the drills' take
+SECONDS = 16.0  # of the drills' take
 CAMERA, SENSOR, STEPPED = "cam3", "lower_back", "cam2"
-WAIT_S = 10.0  # bound on every wait for what the host publishes
+WAIT_S = 20.0  # bound on every wait for what the host publishes (the machine may be loaded)
 PERIOD_S = 1 / 60
 CLOCK_STEPS = ((3.0, 1.0), (4.0, 0.0), (5.0, -1.0), (6.0, 0.0))  # (take s, the box's clock off by s)
 # Between launching the processes and the take's start: on this 2-core machine shared with
-# builds (load 16) a dozen Python processes took up to 5 s to start, and a box that opens its
-# camera after the take started captures from then on.
-LEAD_S = 8.0
+# builds (load 16-19) a dozen Python processes took 5 s and more to start, and a box that opens
+# its camera after the take started captures from then on.
+LEAD_S = 10.0
 
 
 def studio(folder: Path, seed: int = 5) -> Studio:
