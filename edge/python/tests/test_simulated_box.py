@@ -142,8 +142,7 @@ def test_the_simulated_source_names_what_is_wrong(tmp_path) -> None:
 def test_an_unplugged_box_closes_its_socket_for_the_span_and_binds_again(tmp_path) -> None:
     streams = stream_file(tmp_path, 120)  # 2 s
     seconds = Streams.load(streams).frame_times_ns * 1e-9
-    # started 3 s ahead: a box that opens its camera after the take started skips what it missed
-    endpoint, start = free_endpoint(), time.time_ns() + 3000 * MS
+    endpoint, start = free_endpoint(), time.time_ns() + 1500 * MS
     context = zmq.Context.instance()
     sub = transport.subscriber(context, [endpoint])
     monitor = sub.get_monitor_socket(zmq.EVENT_CONNECTED | zmq.EVENT_DISCONNECTED)
@@ -183,15 +182,15 @@ def test_only_a_simulated_box_can_be_unplugged() -> None:
 
 
 def test_a_box_started_during_the_take_captures_from_then_on_and_its_clock_can_be_stepped(tmp_path) -> None:
-    """A box (re)started 1 s into the take sends from then on, not the second it missed at
-    once; --clock-step stamps its frames with a clock that reads off by the step's offset
+    """A box (re)started 1 s into the take with --from-open sends from then on, not the second
+    it missed at once; --clock-step stamps its frames with a clock that reads off by the step's offset
     (a PTP loss) while they are still captured, and sent, at their time."""
     streams = stream_file(tmp_path, 180)  # 3 s
     seconds = Streams.load(streams).frame_times_ns * 1e-9
     endpoint, start = free_endpoint(), time.time_ns() - 1000 * MS
     sub = transport.subscriber(zmq.Context.instance(), [endpoint])
     box = subprocess.Popen([sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{streams}", "--camera",
-                            "cam0", "--bind", endpoint, "--start-ns", str(start), "--clock-step", "1.5", "1.0",
+                            "cam0", "--bind", endpoint, "--start-ns", str(start), "--from-open", "--clock-step", "1.5", "1.0",
                             "--clock-step", "2.0", "-1.0", "--clock-step", "2.5", "0"], stderr=subprocess.PIPE,
                            text=True)
     got = []

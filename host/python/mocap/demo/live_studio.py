@@ -1,7 +1,7 @@
 """The simulated studio's processes held one by one, for the crash drills and the soak
 (mocap.demo.drill, mocap.demo.soak): mocapd, one camera box per camera, the IMU hub (beside
 its simulated sensor nodes) and the recorder, each killed (SIGKILL) and started again by name
-as systemd would; a watcher thread collects mocapd's PoseFrame and Health with their arrival
+as systemd would (a box started again captures from then on: `--from-open`); a watcher thread collects mocapd's PoseFrame and Health with their arrival
 times, and a drill waits on what it sees (`wait`), never on the clock alone."""
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ class LiveStudio:
         self.start_ns = time.time_ns() + int(self.lead_s * 1e9)
         self.commands["mocapd"] = [str(play.MOCAPD), str(self.studio.session), "--quiet"]
         for c, camera in enumerate(self.studio.camera_ids):
-            self.commands[camera] = [*play.camera_box_command(self.studio, c, self.start_ns),
+            self.commands[camera] = [*play.camera_box_command(self.studio, c, self.start_ns), "--from-open",
                                      *self.camera_args.get(camera, [])]
         self._nodes, port = play.start_sim_nodes(self.studio, self.start_ns)
         self.commands["hub"] = play.imu_hub_command(self.studio, port)
