@@ -18,6 +18,14 @@ bool ClockWatch::Check(int64_t time_ns, int64_t now_ns) {
     *settled_ += (offset - *settled_) / 16;  // follows slow drift and the latency's level
     return true;
   }
+  if (offset < *settled_ - kStepNs && offset >= -kStepNs) {
+    // Sooner after its time than the settled offset says, and not from the future: the offset
+    // had settled on a backlog's (a box that sent what it had queued at once), not a step.
+    settled_ = offset;
+    suspect_.reset();
+    off_since_ns_.reset();
+    return true;
+  }
   if (!suspect_ || std::llabs(offset - *suspect_) > kStepNs) {  // a new level
     suspect_ = offset;
     suspect_since_ns_ = now_ns;

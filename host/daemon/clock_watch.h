@@ -3,12 +3,14 @@
 // once and keeps it there, where a stall of the network or of the host delays a backlog that
 // then drains. A message whose offset leaves the stream's settled offset by more than kStepNs
 // is out of band; out-of-band messages at one offset for kConfirmNs of arrival time are a step
-// (counted, as is a move from one such offset to another), and the stream is off its clock until
-// its offsets return to the settled one (the clock locked again: counted too). Its messages are
-// refused while it is off, and any that would come from the future (ahead of the settled offset),
-// so a box's frames are never fused with frames of another time; a stream off for kRelearnNs takes
-// its new offset as settled (a step of the host's own clock otherwise left every stream out for
-// good).
+// (counted, as is a move from one such offset to another), and the stream is off its clock
+// until its offsets return to the settled one (the clock locked again: counted too). Its
+// messages are refused while it is off, and any that would come from the future (ahead of the
+// settled offset by kStepNs and of the host's clock), so a box's frames are never fused with
+// frames of another time; a stream off for kRelearnNs takes its new offset as settled (a step
+// of the host's own clock otherwise left every stream out for good). An offset that settled on
+// a backlog (a box that sent its queue at once) gives way to the first message that arrives
+// sooner without being from the future.
 #ifndef MOCAP_DAEMON_CLOCK_WATCH_H_
 #define MOCAP_DAEMON_CLOCK_WATCH_H_
 

@@ -66,5 +66,17 @@ TEST(ClockWatch, AStepThatLastsIsTakenAsTheClockAndAFutureFirstMessageIsRefused)
   EXPECT_EQ(w.steps(), 1u);
 }
 
+// A box that starts by sending a second of queued frames at once, then on time: its offset
+// settles on the backlog's and gives way to the on-time frames' without a step or a drop.
+TEST(ClockWatch, AnOffsetSettledOnABacklogGivesWayToTimelyMessages) {
+  ClockWatch w;
+  int taken = 0;
+  for (int k = 0; k < 60; ++k) taken += w.Check(k * kPeriod, 1000 * kMs + k * kMs / 10);
+  taken += Feed(&w, 1100 * kMs, 3000 * kMs, 0);
+  EXPECT_EQ(taken, 60 + 114);
+  EXPECT_EQ(w.steps(), 0u);
+  EXPECT_EQ(w.dropped(), 0u);
+}
+
 }  // namespace
 }  // namespace mocap
