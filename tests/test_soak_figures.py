@@ -18,6 +18,7 @@ def test_memory_growth_is_fitted_after_the_warm_up_and_descriptors_kept():
     out = soak.memory({"mocapd": list(zip(t, rss, fds))})["mocapd"]
     assert abs(out["rss_growth_mb_per_10min"] - 0.5) < 1e-6
     assert out["rss_mb_after_warm_up"] == 80.1 and out["fds"] == [12, 13] and out["fds_max"] == 13
+    assert out["fds_after_warm_up"] == 12
 
 
 def test_latency_p99_per_window_keeps_whole_windows_and_a_last_half():

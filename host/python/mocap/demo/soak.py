@@ -44,7 +44,8 @@ def _sample(live: LiveStudio, stop: threading.Event, samples: dict[str, list]) -
 
 def memory(samples: dict[str, list], warm_up_s: float = WARM_UP_S) -> dict:
     """Per process: RSS after the warm-up and at the end (MB), its growth fitted after the
-    warm-up (MB per 10 minutes, least squares), and the file descriptors at start and end."""
+    warm-up (MB per 10 minutes, least squares), and the file descriptors at start and end, their
+    most and after the warm-up."""
     out = {}
     for name, rows in sorted(samples.items()):
         a = np.array(rows)
@@ -53,7 +54,8 @@ def memory(samples: dict[str, list], warm_up_s: float = WARM_UP_S) -> dict:
         out[name] = {"rss_mb_after_warm_up": round(float(late[0, 1]), 1) if len(late) else None,
                      "rss_mb_end": round(float(a[-1, 1]), 1),
                      "rss_growth_mb_per_10min": round(slope, 3) if slope is not None else None,
-                     "fds": [int(a[0, 2]), int(a[-1, 2])], "fds_max": int(a[:, 2].max())}
+                     "fds": [int(a[0, 2]), int(a[-1, 2])], "fds_max": int(a[:, 2].max()),
+                     "fds_after_warm_up": int(late[0, 2]) if len(late) else None}
     return out
 
 
