@@ -59,7 +59,7 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
 
     # The recording (session attached) solved offline through the same pipeline gives the
     # live poses back until the box rejoins: from then on the recorder and mocapd each
-    # reconnect to it on their own ZeroMQ back-off (randomised, up to 2 s), so the recording
+    # reconnect to it on their own ZeroMQ back-off (up to 250 ms), so the recording
     # may lack cam3 frames mocapd solved with, and every later pose differs by its warm start.
     poses, *_ = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}

@@ -65,11 +65,20 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
     if (c >= 0) monitor_.camera(c).invalid++;
     return monitor_.Drop(rejection.reason, rejection.detail, why);
   }
-  monitor_.camera(c).Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
+  StreamStats& stats = monitor_.camera(c);
+  stats.Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
   if (OffClock(frame.capture_time_ns(), now_ns)) {
     return monitor_.Drop("clock_offset",
                          frame.camera_id() + " frame " + std::to_string(frame.frame_index()) +
                              " captured " + OffClockDetail(frame.capture_time_ns(), now_ns),
+                         why);
+  }
+  if (!stats.clock.Check(frame.capture_time_ns(), now_ns)) {
+    const int64_t ms = (now_ns - frame.capture_time_ns()) / 1'000'000;
+    return monitor_.Drop("clock_step",
+                         frame.camera_id() + " frame " + std::to_string(frame.frame_index()) +
+                             " arrived " + std::to_string(ms < 0 ? -ms : ms) + " ms " +
+                             (ms < 0 ? "before" : "after") + " its time: its clock is off",
                          why);
   }
   // Projecting the tracked pose is needed only to tell several persons apart.
@@ -99,6 +108,10 @@ bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string*
     if (OffClock(s.sample_time_ns(), now_ns)) {
       off_clock++;
       off_time_ns = s.sample_time_ns();
+      continue;
+    }
+    if (!monitor_.imu(i).clock.Check(s.sample_time_ns(), now_ns)) {
+      monitor_.CountDropped("clock_step");
       continue;
     }
     if (!sync_.AddImu(InputDecoder::ToImuInput(s, i), now_ns))

@@ -270,5 +270,42 @@ TEST(InputPath, InputsOnAnotherClockThanTheArrivalAreDropped) {
   EXPECT_TRUE(Feed(&path, studio.Keypoints(1, 0), kT0 + kFrame + 9000 * kMs));
 }
 
+// Camera 1's clock steps +1 s for 1 s (a PTP loss), then -1 s for 1 s: its frames are refused
+// while the others' still make a frame each, waiting for it no longer than for a box gone
+// silent (max_wait, seen at the next frame's poll); Health counts the three steps.
+TEST(InputPath, ACameraWhoseClockStepsIsLeftOutWithoutHoldingTheOthers) {
+  const Studio studio;
+  InputPath path = studio.Path();
+  int frames = 0, with_camera1 = 0;
+  for (int k = 0; k < 240; ++k) {
+    const int64_t now = kT0 + k * kFrame + 5 * kMs;
+    const int64_t step = k >= 60 && k < 120    ? 1'000'000'000
+                         : k >= 120 && k < 180 ? -1'000'000'000
+                                               : 0;
+    Feed(&path, studio.Imus(k), now);
+    Feed(&path, studio.Keypoints(k, 0), now);
+    v1::KeypointFrame stepped = studio.Keypoints(k, 1);
+    stepped.set_capture_time_ns(stepped.capture_time_ns() + step);
+    Feed(&path, stepped, now);
+    for (const SyncedFrame& f : path.TakeReady(now)) {
+      frames++;
+      with_camera1 += f.cameras_clocked.size() == 2;
+      EXPECT_LE(f.released_ns - f.time_ns, 5 * kMs + SyncOptions().max_wait_ns + kFrame);
+    }
+  }
+  EXPECT_GE(frames, 238);
+  EXPECT_GE(with_camera1, 120 - 2);  // before and after the steps
+  EXPECT_LE(with_camera1, 120 + 8);  // and the step back's first frames, late for their own time
+  HealthInputs in;
+  in.sync = &path.sync();
+  in.headings.assign(studio.scene.imus.size(), 0.0);
+  const v1::Health h = path.monitor().Health(kT0 + 241 * kFrame, in);
+  const v1::StreamHealth& camera1 = h.streams(1);
+  EXPECT_EQ(camera1.stream(), "camera/" + studio.scene.rig.cameras[1].name);
+  EXPECT_EQ(camera1.clock_steps(), 3u);  // away, from +1 s to -1 s, back
+  EXPECT_GE(camera1.dropped(), 110u);
+  EXPECT_EQ(h.streams(0).clock_steps(), 0u);
+}
+
 }  // namespace
 }  // namespace mocap

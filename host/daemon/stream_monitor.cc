@@ -32,7 +32,9 @@ void StreamMonitor::AddStream(const std::string& name, bool active, const Stream
     s->set_duplicates(counts->duplicates);
   }
   s->set_malformed(st->invalid);
-  s->set_dropped(s->late() + (repeats_drop ? s->duplicates() : 0) + s->malformed());
+  s->set_clock_steps(st->clock.steps());
+  s->set_dropped(s->late() + (repeats_drop ? s->duplicates() : 0) + s->malformed() +
+                 st->clock.dropped());
   st->received_in_period = 0;
   st->latency_ms.clear();
 }
@@ -79,8 +81,11 @@ void StreamMonitor::AddCalibration(const HealthInputs& in, v1::Health* h) {
 // "input": every message dropped before it reached a stream; "pose": the frames solved.
 void StreamMonitor::AddInputAndPose(const HealthInputs& in, v1::Health* h) {
   StreamStats input;
-  for (const auto& [reason, n] : dropped_)  // those two are counted by their streams
-    input.invalid += reason == "late_or_duplicate" || reason == "invalid_calibration" ? 0 : n;
+  for (const auto& [reason, n] : dropped_)  // those three are counted by their streams
+    input.invalid +=
+        reason == "late_or_duplicate" || reason == "invalid_calibration" || reason == "clock_step"
+            ? 0
+            : n;
   AddStream("input", true, nullptr, true, &input, h);
   h->set_latency_p50_ms(Percentile(latencies_ms_, 0.5));
   h->set_latency_p99_ms(Percentile(latencies_ms_, 0.99));

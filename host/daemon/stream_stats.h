@@ -7,6 +7,8 @@
 #include <optional>
 #include <vector>
 
+#include "clock_watch.h"
+
 namespace mocap {
 
 struct StreamStats {
@@ -14,6 +16,7 @@ struct StreamStats {
   std::optional<uint64_t> last_counter;  // frame index / sequence / packet counter
   int64_t last_time_ns = 0;              // the sender's time of that message
   std::vector<double> latency_ms;        // arrival - sender's time, this period
+  ClockWatch clock;                      // the sender's clock's steps (the caller checks)
 
   // Counts a message: its latency, and gaps in the sender's counter (lost messages; modulo 0
   // for a counter that does not wrap). A counter behind the last one is a late message when

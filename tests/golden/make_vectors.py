@@ -114,7 +114,7 @@ def stream_health(s: dict) -> bytes:
             + b"".join(vint(4 + i, int(s.get(c, 0))) for i, c in enumerate(["received", "dropped", "late", "duplicates",
                                                                          "malformed", "lost"]))
             + f64(10, s.get("latencyP50Ms", 0.0)) + f64(11, s.get("latencyP99Ms", 0.0))
-            + vint(18, int(s.get("handshakeFailures", 0))))
+            + vint(18, int(s.get("handshakeFailures", 0))) + vint(19, int(s.get("clockSteps", 0))))
 
 
 def health(m: dict) -> bytes:
@@ -173,6 +173,12 @@ VECTORS = {
         "streams": [{"stream": "link/tcp://box-1.local:5600", "active": True, "handshakeFailures": "17"},
                     {"stream": "link/tcp://hub.local:5601", "handshakeFailures": "300"}],
         "framesSolved": "60"}, None),
+    # A camera whose clock stepped away and back (a PTP loss), its frames refused meanwhile.
+    "health_clock_steps": ("mocap.v1.Health", {
+        "source": "host", "timeNs": "1763900002000000000",
+        "streams": [{"stream": "camera/cam2", "active": True, "rateHz": 60.0, "received": "7200", "dropped": "61",
+                     "latencyP50Ms": 6.5, "latencyP99Ms": 9.25, "clockSteps": "2"}],
+        "framesSolved": "7200"}, None),
     "calibration": ("mocap.v1.Calibration", {
         "source": "calibrator", "sequence": "2", "validFromNs": "1763900012000000000",
         "skeletonJson": '{"format": "mocap.skeleton/1", "bones": []}',

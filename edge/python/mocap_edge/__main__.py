@@ -1,7 +1,7 @@
 """python -m mocap_edge camera --source URI --camera ID --bind ENDPOINT [--model M] [--hs PERIOD BURST]
        [--realtime] [--trigger CHIP:LINE --exposure-mid-us US]
    python -m mocap_edge camera --source sim:STREAMS --camera ID --bind ENDPOINT --start-ns T [--seed S]
-       [--stop FROM_S TO_S]                                            (a box of the simulated studio)
+       [--stop FROM_S TO_S] [--from-open] [--clock-step AT_S OFFSET_S]...  (a box of the simulated studio)
    python -m mocap_edge imu-hub [--can URI] [--i2c URI] --config hub.toml --bind ENDPOINT [--duration S]
    camera and imu-hub take [--curve-secret FILE [--curve-allow KEY_OR_FILE...]]: the stream authenticated
    and encrypted with the box's CURVE key (README, "Securing the streams")
@@ -65,6 +65,12 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--stop", nargs=2, type=float, metavar=("FROM_S", "TO_S"),
                    help="unplug during this span of the take: a sim: camera box (its socket closed, bound again "
                    "after), or sim-nodes' --stop-sensor")
+    p.add_argument("--from-open", action="store_true",
+                   help="a sim: box started during the take captures from then on, as a camera does (by default "
+                   "it sends the frames it missed at once: a box slow to start still delivers the take's start)")
+    p.add_argument("--clock-step", nargs=2, type=float, action="append", default=[], metavar=("AT_S", "OFFSET_S"),
+                   help="a sim: camera box's clock reads OFFSET_S off the shared timebase from take time AT_S on "
+                   "(a PTP loss; OFFSET_S 0: locked again); repeatable")
     p.add_argument("--stop-sensor", help="role sim-nodes: the sensor whose node is unplugged during --stop")
     p.add_argument("--seed", type=int, default=0, help="seed of the simulated detection latency (sim: model)")
     p.add_argument("--curve-secret", metavar="FILE", help="roles camera and imu-hub: the box's secret key file "
@@ -125,6 +131,8 @@ def _camera(a: argparse.Namespace) -> int:
 
 def _spans(a: argparse.Namespace) -> list[Span | None]:
     """When the box is on: all along, or before and after the span it is unplugged (--stop)."""
+    if a.clock_step and not a.source.startswith("sim:"):
+        raise EdgeError("--clock-step offsets a simulated box's clock: it needs a sim: source")
     if not a.stop:
         return [None]
     if not a.source.startswith("sim:"):
@@ -151,7 +159,7 @@ def _source_options(a: argparse.Namespace, span: Span | None) -> dict[str, objec
     if a.fps:
         options["fps"] = a.fps
     if scheme == "sim":
-        options["camera"] = a.camera
+        options.update(camera=a.camera, live=a.from_open, clock_steps=tuple(map(tuple, a.clock_step)))
         if span:
             options["span"] = span
     return options

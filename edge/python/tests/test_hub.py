@@ -380,3 +380,18 @@ def test_the_hub_benchmark_runs():
     rate, frames = bench.decode_rate(seconds=1.0)
     assert rate > 0 and frames > 17 * 120 * 2
     assert 0 < bench.batch_latency_ms(seconds=1.0) < 10.0  # a round leaves when its last node's sample is in
+
+
+def test_a_node_oscillator_holds_a_bounded_window_and_gives_the_same_times_within_it():
+    """A node's timer over 20 minutes keeps at most 2 * KEEP_S of its grid (the soak's simulated
+    nodes grew by 64 MB in 10 minutes), and stays the pure function of time it was: each time
+    as a fresh oscillator asked only for it gives."""
+    def oscillator():
+        return NodeOscillator(30.0, 5.0, 0.1, np.random.default_rng(3))
+
+    keeping = oscillator()
+    times = [int(t) for t in np.linspace(0, 1200e9, 6)]
+    assert [keeping.advance(t) for t in times] == [oscillator().advance(t) for t in times]
+    assert len(keeping._node_us) <= 2 * keeping._keep + 2
+    with pytest.raises(ValueError, match="before the kept window"):
+        keeping.advance(0)

@@ -179,3 +179,31 @@ def test_only_a_simulated_box_can_be_unplugged() -> None:
                           "--bind", "tcp://127.0.0.1:0", "--stop", "1", "2"], capture_output=True, text=True,
                          timeout=60)
     assert out.returncode == 1 and out.stderr.startswith("mocap_edge: --stop unplugs a simulated box")
+
+
+def test_a_box_started_during_the_take_captures_from_then_on_and_its_clock_can_be_stepped(tmp_path) -> None:
+    """A box (re)started 1 s into the take with --from-open sends from then on, not the second
+    it missed at once; --clock-step stamps its frames with a clock that reads off by the step's offset
+    (a PTP loss) while they are still captured, and sent, at their time."""
+    streams = stream_file(tmp_path, 180)  # 3 s
+    seconds = Streams.load(streams).frame_times_ns * 1e-9
+    endpoint, start = free_endpoint(), time.time_ns() - 1000 * MS
+    sub = transport.subscriber(zmq.Context.instance(), [endpoint])
+    box = subprocess.Popen([sys.executable, "-m", "mocap_edge", "camera", "--source", f"sim:{streams}", "--camera",
+                            "cam0", "--bind", endpoint, "--start-ns", str(start), "--from-open", "--clock-step", "1.5", "1.0",
+                            "--clock-step", "2.0", "-1.0", "--clock-step", "2.5", "0"], stderr=subprocess.PIPE,
+                           text=True)
+    got = []
+    while box.poll() is None or sub.poll(500):
+        if sub.poll(100):
+            got.append((time.time_ns(), wire.decode(sub.recv_multipart())))
+    sub.close()
+    assert box.returncode == 0, box.stderr.read()
+    index = np.array([m.frame_index for _, m in got])
+    offset_s = np.array([(m.capture_time_ns - start) * 1e-9 - seconds[m.frame_index] for _, m in got])
+    assert seconds[index.min()] > 0.9 and len(index) == index.max() - index.min() + 1  # from then on, each frame
+    taken = seconds[index]
+    expected = np.select([taken < 1.5, taken < 2.0, taken < 2.5], [0.0, 1.0, -1.0], 0.0)
+    assert np.abs(offset_s - expected).max() < 1e-6
+    sent_late_s = np.array([(t - start) * 1e-9 for t, _ in got]) - taken
+    assert 0 < sent_late_s.min() and np.median(sent_late_s) < 0.1  # sent at their time, whatever the stamp

@@ -25,6 +25,9 @@ from mocap_edge.sources.base import Frame, FrameSource
 from mocap_edge.streams import CameraStream, Streams
 
 MAX_FRAMES = 1 << 24  # frame numbers a picture's 24 bits of colour can code
+# A live source opened during the take skips the frames older than this (what a camera's
+# driver queue would still hold is delivered).
+LIVE_BACKLOG_NS = 100_000_000
 
 
 def picture(index: int, size: tuple[int, int]) -> np.ndarray:
@@ -53,10 +56,16 @@ def load_camera(streams: str, camera: str) -> CameraStream:
 class SimulatedSource(FrameSource):
     """Camera `camera` of the stream file `streams`, captured from `start_ns` (default now).
     `span` (from_s, to_s): only the frames of that span of the take (a box switched on late
-    or off early; default all); their numbers are the file's."""
+    or off early; default all); their numbers are the file's. live: the frames whose time
+    has passed at the first read are not captured (a camera started, or started again,
+    during the take captures from then on); otherwise they are delivered at once (offline).
+    clock_steps [(at_s, offset_s), ...]: from take time at_s on, the box's clock reads offset_s
+    off the shared timebase (a PTP loss; 0 when it locks again): the frames are captured at
+    their time and stamped with the box's clock."""
 
     def __init__(self, streams: str, camera: str, start_ns: int | None = None,
-                 span: tuple[float, float] = (-math.inf, math.inf)) -> None:
+                 span: tuple[float, float] = (-math.inf, math.inf), live: bool = False,
+                 clock_steps: tuple[tuple[float, float], ...] = ()) -> None:
         try:
             self.stream = load_camera(streams, camera)
         except (OSError, ValueError) as e:
@@ -68,11 +77,23 @@ class SimulatedSource(FrameSource):
         self._start_ns = time.time_ns() if start_ns is None else start_ns
         seconds = times * 1e-9
         self._frames = iter(np.flatnonzero((seconds >= span[0]) & (seconds < span[1])).tolist())
+        self._oldest_ns = time.time_ns() - LIVE_BACKLOG_NS if live else None
+        steps = sorted(clock_steps)
+        self._step_at_ns = np.array([self._start_ns + round(at * 1e9) for at, _ in steps], np.int64)
+        self._step_offset_ns = np.array([0, *(round(offset * 1e9) for _, offset in steps)], np.int64)
 
     def _next_frame(self) -> Frame | None:
         f = next(self._frames, None)
+        if self._oldest_ns is not None:  # once: what was captured before the camera was opened is gone
+            while f is not None and self._start_ns + int(self.stream.frame_times_ns[f]) < self._oldest_ns:
+                f = next(self._frames, None)
+            self._oldest_ns = None
         if f is None:
             return None
         capture_ns = self._start_ns + int(self.stream.frame_times_ns[f])
         pacing.sleep_until(capture_ns)
-        return Frame(picture(f, self.size), f, capture_ns)
+        return Frame(picture(f, self.size), f, capture_ns + self.clock_offset_ns(capture_ns))
+
+    def clock_offset_ns(self, t_ns: int) -> int:
+        """How far the box's clock reads off the shared timebase at t_ns (clock_steps)."""
+        return int(self._step_offset_ns[np.searchsorted(self._step_at_ns, t_ns, side="right")])

@@ -1,11 +1,12 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer, recording)."""
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer, recording,
+drill; soak only when asked: it runs for minutes)."""
 
 from __future__ import annotations
 
 import argparse
 import json
 
-from mocap.demo import record_drill
+from mocap.demo import drill, record_drill, soak
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, MocapError
 from mocap.eval import bench, edge_detector, peer
@@ -13,12 +14,15 @@ from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "edge", "firmware", "hub", "peer", "recording"]
+KINDS = ["solver", "live", "edge", "firmware", "hub", "peer", "recording", "drill"]
+ON_REQUEST = ["soak"]  # not in the default run: it lasts --minutes
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("bench", help="run benchmarks; print one JSON object per line")
-    b.add_argument("--only", nargs="+", default=KINDS, choices=KINDS, help="benchmarks to run (default all)")
+    b.add_argument("--only", nargs="+", default=KINDS, choices=KINDS + ON_REQUEST,
+                   help="benchmarks to run (default all but soak)")
+    b.add_argument("--minutes", type=float, default=10.0, help="length of the soak's take (default 10)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--live-normal-priority", action="store_true",
                    help="run the live benchmark's mocapd without --realtime (to see what real-time scheduling buys)")
@@ -35,6 +39,11 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(live.bench(seconds=args.live_seconds, realtime=not args.live_normal_priority)), flush=True)
     if "recording" in args.only:  # the recorder killed mid-take: what its file keeps
         print(json.dumps(record_drill.bench()), flush=True)
+    if "drill" in args.only:  # camera box, IMU hub and mocapd killed, a box's clock stepped, mid-take
+        for line in drill.bench():
+            print(json.dumps({"bench": "drill", **line}), flush=True)
+    if "soak" in args.only:  # the live studio for --minutes: latency windows, memory, descriptors
+        print(json.dumps(soak.bench(args.minutes)), flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)

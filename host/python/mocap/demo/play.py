@@ -49,11 +49,10 @@ def _box_keys(studio: Studio, device: str) -> list[str]:
     return ["--curve-secret", str(studio.keys / f"{device}.key"), "--curve-allow", str(studio.keys / "host.pub")]
 
 
-def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
-    """The studio's IMUs as sensor nodes (`mocap_edge sim-nodes`, served as a CAN bus over TCP)
-    and the IMU hub reading them (`mocap_edge imu-hub --can socketcand:...`), started in that
-    order: the hub connects once the nodes listen. unplugged (sensor id, from_s, to_s): that
-    sensor's node is unplugged during the span."""
+def start_sim_nodes(studio: Studio, start_ns: int, unplugged: tuple | None = None) -> tuple[subprocess.Popen, int]:
+    """The studio's IMUs as sensor nodes (`mocap_edge sim-nodes`, served as a CAN bus over
+    TCP), and the port they listen on. unplugged (sensor id, from_s, to_s): that sensor's node
+    is unplugged during the span."""
     nodes_cmd = [sys.executable, "-m", "mocap_edge", "sim-nodes", "--streams", str(studio.streams),
                  "--config", str(studio.hub_config), "--port", "0", "--start-ns", str(start_ns)]
     if unplugged:
@@ -63,9 +62,19 @@ def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> li
     if len(listening) != 2:
         nodes.kill()
         raise InputError(f"the simulated sensor nodes did not start (status {nodes.wait()}; their log is above)")
-    hub = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can",
-                            f"socketcand:127.0.0.1:{listening[1]}:can0", "--config", str(studio.hub_config),
-                            "--bind", studio.endpoints["hub0"], *_box_keys(studio, "hub0")])
+    return nodes, int(listening[1])
+
+
+def imu_hub_command(studio: Studio, nodes_port: int) -> list[str]:
+    """The IMU hub (`mocap_edge imu-hub --can socketcand:...`) reading the nodes on nodes_port."""
+    return [sys.executable, "-m", "mocap_edge", "imu-hub", "--can", f"socketcand:127.0.0.1:{nodes_port}:can0",
+            "--config", str(studio.hub_config), "--bind", studio.endpoints["hub0"], *_box_keys(studio, "hub0")]
+
+
+def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
+    """The sensor nodes, then the hub reading them: the hub connects once the nodes listen."""
+    nodes, port = start_sim_nodes(studio, start_ns, unplugged)
+    hub = subprocess.Popen(imu_hub_command(studio, port))
     return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
@@ -77,7 +86,7 @@ def _calibrator_command(studio: Studio, duration: float) -> list[str]:
             "--publish", studio.calibrator, "--duration", f"{LEAD_S + duration + 1.0:.3f}"]
 
 
-def _recorder_command(studio: Studio, path: Path, duration: float) -> list[str]:
+def recorder_command(studio: Studio, path: Path, duration: float) -> list[str]:
     """`mocap record` of every stream (the edge boxes', the calibrator's, mocapd's poses and
     Health), with the session attached. A process of its
     own, as in a studio: a recorder thread in this process shared the interpreter with the
@@ -143,7 +152,7 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
         commands.append(_calibrator_command(studio, duration))
     edge = [subprocess.Popen(cmd) for cmd in commands]
     edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
-    recording = subprocess.Popen(_recorder_command(studio, record, duration)) if record else None
+    recording = subprocess.Popen(recorder_command(studio, record, duration)) if record else None
     keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:

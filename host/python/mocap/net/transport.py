@@ -22,7 +22,7 @@ from mocap.net.keys import ClientKeys, ServerKeys
 
 PUBLISHER_HWM = 2000  # messages: ~3 s of a camera at 60 fps plus slack
 SUBSCRIBER_HWM = 20000  # messages: ~3 s of 8 cameras + an IMU hub
-RECONNECT_MS = (100, 2000)  # first retry, back-off ceiling
+RECONNECT_MS = (100, 250)  # first retry, back-off ceiling (as mocapd's: a box back is found within 250 ms)
 
 
 class _Allowed:

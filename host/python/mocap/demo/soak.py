@@ -1,0 +1,100 @@
+"""The soak: the live simulated studio (mocap.demo.live_studio: 8 camera boxes, the IMU hub
+and its nodes, mocapd, the recorder) for M minutes (`mocap bench --only soak --minutes M`):
+frames that never came back, the host's latency p99 per 5-minute window, and every process's
+resident memory and open file descriptors sampled from /proc."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from mocap.demo.live_studio import LiveStudio
+from mocap.demo.play import Run
+from mocap.demo.score import score
+from mocap.demo.studio import prepare
+
+SAMPLE_S = 5.0  # /proc sampling period
+WINDOW_S = 300.0  # latency windows
+WARM_UP_S = 120.0  # memory growth is fitted after it (allocators, caches, the solver's first frames)
+
+
+def proc_sample(pid: int) -> tuple[float, int] | None:
+    """(resident memory MB, open file descriptors) of pid from /proc; None once it ended."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            rss_kb = next(int(line.split()[1]) for line in f if line.startswith("VmRSS:"))
+        return rss_kb / 1024.0, len(os.listdir(f"/proc/{pid}/fd"))
+    except (OSError, StopIteration, ValueError):
+        return None
+
+
+def _sample(live: LiveStudio, stop: threading.Event, samples: dict[str, list]) -> None:
+    """Every SAMPLE_S: (take s, RSS MB, fds) of each process, by name, until stop."""
+    while not stop.wait(SAMPLE_S):
+        t = live.take_s(time.time_ns())
+        for name, pid in live.pids().items():
+            if (got := proc_sample(pid)) is not None:
+                samples.setdefault(name, []).append((t, *got))
+
+
+def memory(samples: dict[str, list], warm_up_s: float = WARM_UP_S) -> dict:
+    """Per process: RSS after the warm-up and at the end (MB), its growth fitted after the
+    warm-up (MB per 10 minutes, least squares), and the file descriptors at start and end, their
+    most and after the warm-up."""
+    out = {}
+    for name, rows in sorted(samples.items()):
+        a = np.array(rows)
+        late = a[a[:, 0] >= warm_up_s]
+        slope = float(np.polyfit(late[:, 0], late[:, 1], 1)[0]) * 600.0 if len(late) >= 3 else None
+        out[name] = {"rss_mb_after_warm_up": round(float(late[0, 1]), 1) if len(late) else None,
+                     "rss_mb_end": round(float(a[-1, 1]), 1),
+                     "rss_growth_mb_per_10min": round(slope, 3) if slope is not None else None,
+                     "fds": [int(a[0, 2]), int(a[-1, 2])], "fds_max": int(a[:, 2].max()),
+                     "fds_after_warm_up": int(late[0, 2]) if len(late) else None}
+    return out
+
+
+def latency_windows(take_s: np.ndarray, latency_ms: np.ndarray, window_s: float = WINDOW_S) -> list[float]:
+    """The latency p99 (ms) of each whole window of window_s (a last partial one is kept when
+    it holds at least half a window)."""
+    out = []
+    for lo in np.arange(0.0, take_s.max() + 1e-9, window_s):
+        inside = (take_s >= lo) & (take_s < lo + window_s)
+        if inside.any() and take_s[inside].max() - lo >= window_s / 2:
+            out.append(round(float(np.percentile(latency_ms[inside], 99)), 2))
+    return out
+
+
+def bench(minutes: float = 10.0) -> dict:
+    """The `soak` benchmark line."""
+    seconds = minutes * 60.0
+    with tempfile.TemporaryDirectory() as tmp:
+        # the truth's calibration: estimating one runs the whole take's camera messages through
+        # the boxes' pieces first (mocap.demo.studio.calibrate), minutes for a long take
+        studio = prepare(Path(tmp) / "studio", seconds, calibration="oracle")
+        stop, samples = threading.Event(), {}
+        with LiveStudio(studio, record=Path(tmp) / "take.mcap") as live:
+            sampler = threading.Thread(target=_sample, args=(live, stop, samples), daemon=True)
+            sampler.start()
+            live.wait(lambda arrived: live.take_s(time.time_ns()) > seconds + 1.0, live.lead_s + seconds + 60.0,
+                      "the take's end")
+            stop.set()
+            sampler.join()
+            poses, healths = [a.message for a in live.poses()], [a.message for a in live.healths()]
+        result = score(studio, Run(poses, healths, {}, live.start_ns))
+        file_mb = (Path(tmp) / "take.mcap").stat().st_size / 1e6
+    take_s = np.array([live.take_s(p.capture_time_ns) for p in poses])
+    windows = latency_windows(take_s, np.array([p.latency_ms for p in poses]))
+    last = healths[-1] if healths else None
+    return {"bench": "soak", "minutes": minutes, "frames": result["frames"], "dropped": result["dropped"],
+            "latency_p50_ms": result["latency_p50_ms"], "latency_p99_ms": result["latency_p99_ms"],
+            "latency_p99_ms_by_5min": windows,
+            "latency_p99_spread_pct": round(100.0 * (max(windows) / min(windows) - 1.0), 1) if windows else None,
+            "joint_centres_pos_cm": result.get("joint_centres_pos_cm"), "recording_mb": round(file_mb, 1),
+            "host_inputs_dropped": {s.stream: s.dropped for s in (last.streams if last else []) if s.dropped},
+            "processes": memory(samples)}
