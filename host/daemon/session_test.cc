@@ -76,5 +76,19 @@ TEST(Session, TheSyncKeysAreThoseDocumented) {
                                             "imu_only_rate_hz"}));
 }
 
+// A session naming a device or a huge file is refused before it is read: reading /dev/zero
+// would never end, and a huge file would be held in memory whole.
+TEST(Session, DevicesAndHugeFilesAreRefused) {
+  Session s;
+  std::string error;
+  EXPECT_FALSE(LoadSession(WriteSession({{"skeleton", "/dev/zero"}}), &s, &error));
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  const std::string huge = ::testing::TempDir() + "/huge.json";
+  std::ofstream(huge) << std::string(16u << 20, ' ') << "{}";
+  EXPECT_FALSE(LoadSession(WriteSession({{"prior", huge}}), &s, &error));
+  EXPECT_NE(error.find("larger than 16 MiB"), std::string::npos) << error;
+  EXPECT_FALSE(LoadSession("/dev/zero", &s, &error));
+}
+
 }  // namespace
 }  // namespace mocap
