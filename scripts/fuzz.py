@@ -56,12 +56,12 @@ def run(target: str, build: Path, seconds: int, runs: int) -> dict:
     env = {**os.environ, "ASAN_OPTIONS": "detect_leaks=1:allocator_may_return_null=0",
            "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
     proc = subprocess.run(command(target, build, seconds, runs, work, findings), cwd=ROOT, env=env,
-                          capture_output=True, text=True, errors="replace")
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace")
     elapsed = time.monotonic() - start
     new = sorted(p.name for p in findings.iterdir() if p.name not in before and FINDING.match(p.name))
     log = findings / "last_run.log"
-    log.write_text(proc.stderr)
-    executions = re.findall(r"stat::number_of_executed_units:\s*(\d+)", proc.stderr)
+    log.write_text(proc.stdout)
+    executions = re.findall(r"stat::number_of_executed_units:\s*(\d+)", proc.stdout)
     count = lambda kind: sum(n.startswith(kind) for n in new)  # noqa: E731
     crashes = count("crash") + count("leak")
     if proc.returncode != 0 and not new:  # a failure that wrote no input (e.g. a broken fixture)

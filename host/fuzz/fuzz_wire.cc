@@ -14,10 +14,9 @@
 
 namespace {
 
-constexpr std::string_view kTypes[] = {"mocap.v1.KeypointFrame", "mocap.v1.ImuBatch",
-                                       "mocap.v1.PoseFrame",     "mocap.v1.Health",
-                                       "mocap.v1.Calibration",   "mocap.v2.KeypointFrame",
-                                       "other.Thing"};
+constexpr std::string_view kTypes[] = {
+    "mocap.v1.KeypointFrame", "mocap.v1.ImuBatch",      "mocap.v1.PoseFrame", "mocap.v1.Health",
+    "mocap.v1.Calibration",   "mocap.v2.KeypointFrame", "other.Thing"};
 
 uint64_t Dropped(const mocap::HostPipeline& p) {
   uint64_t n = 0;

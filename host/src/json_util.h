@@ -59,6 +59,19 @@ inline bool ParseJson(const std::string& text, nlohmann::json* out, std::string*
   return true;
 }
 
+// Runs parse(), a reader of JSON that checks each value's type before it reads it; a lookup
+// that still meets a value of another type (nlohmann throws then, e.g. value() of a number
+// as a string) is an error with its message, so the Parse*Json functions never throw.
+template <typename Parse>
+bool Guarded(std::string* error, Parse parse) {
+  try {
+    return parse();
+  } catch (const nlohmann::json::exception& e) {
+    *error = std::string("malformed field: ") + e.what();
+    return false;
+  }
+}
+
 // Reads a JSON array of n finite numbers.
 inline bool ReadVector(const nlohmann::json& j, int n, double* out) {
   if (!j.is_array() || static_cast<int>(j.size()) != n) return false;
