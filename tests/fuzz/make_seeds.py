@@ -137,6 +137,7 @@ def take_seeds() -> dict[str, bytes]:
 
 
 def bvh_seeds() -> dict[str, bytes]:
+    import importlib.util
     import tempfile
 
     import numpy as np
@@ -148,9 +149,13 @@ def bvh_seeds() -> dict[str, bytes]:
     thetas = np.zeros((3, skeleton.pose_dim))
     thetas[:, 2] = 0.95
     thetas[1, 3:] = 0.1
+    spec = importlib.util.spec_from_file_location("clip", ROOT / "host/python/tests/test_bvh_retarget.py")
+    clip = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(clip)  # its MotionBuilder-style CLIP, two frames of zeros
+    zeros = "\n".join(" ".join(["0"] * clip.WIDTH) for _ in range(2))
     with tempfile.TemporaryDirectory() as d:
         bvh_export.write_bvh(Path(d) / "clip.bvh", skeleton, thetas, 60.0)
-        return {"exported": (Path(d) / "clip.bvh").read_bytes()}
+        return {"exported": (Path(d) / "clip.bvh").read_bytes(), "motionbuilder": (clip.CLIP + zeros + "\n").encode()}
 
 
 def vmc_seeds() -> dict[str, bytes]:

@@ -12,6 +12,8 @@ from pathlib import Path
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub import bus_budget
 
+MAX_FILE_BYTES = 1 << 20  # hub.toml is read whole
+
 
 @dataclasses.dataclass
 class HubConfig:
@@ -51,6 +53,8 @@ class HubConfig:
     @classmethod
     def load(cls, path: Path) -> HubConfig:
         try:
+            if Path(path).stat().st_size > MAX_FILE_BYTES:
+                raise EdgeError(f"{path}: larger than {MAX_FILE_BYTES >> 10} KiB")
             data = tomllib.loads(Path(path).read_text())
         except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
             raise EdgeError(f"{path}: {e}") from None
