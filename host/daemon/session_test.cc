@@ -90,5 +90,17 @@ TEST(Session, DevicesAndHugeFilesAreRefused) {
   EXPECT_FALSE(LoadSession("/dev/zero", &s, &error));
 }
 
+// A prior's dof is checked against its mean before anything is allocated by it (a dof of
+// 2e9 asked for 16 GB).
+TEST(Session, APriorsDofIsCappedBeforeItIsAllocated) {
+  const std::string prior = ::testing::TempDir() + "/prior.json";
+  std::ofstream(prior) << R"({"format": "mocap.prior/1", "dof": 2000000000, "mean": [0],
+                             "basis": [[1]], "sigma": [1]})";
+  Session s;
+  std::string error;
+  EXPECT_FALSE(LoadSession(WriteSession({{"prior", prior}}), &s, &error));
+  EXPECT_NE(error.find("dof <= 1024"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace mocap
