@@ -6,6 +6,7 @@ CAN bus loaded above bus_budget.MAX_LOAD are refused when it is read."""
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import tomllib
 from pathlib import Path
 
@@ -97,8 +98,9 @@ class HubConfig:
 
 # The type of each setting of [hub]: a value of another type (a string rate, a boolean
 # mode) is refused by name rather than failing a comparison.
-_KINDS = {"hub_id": str, "rate_hz": int, "acc_range_g": int, "gyro_range_dps": int, "mode": str,
-          "sync_hz": (int, float), "batch_ms": (int, float), "stale_s": (int, float), "late_ms": (int, float)}
+_KINDS = {"hub_id": str, "rate_hz": numbers.Integral, "acc_range_g": numbers.Integral,
+          "gyro_range_dps": numbers.Integral, "mode": str, "sync_hz": numbers.Real, "batch_ms": numbers.Real,
+          "stale_s": numbers.Real, "late_ms": numbers.Real}
 
 
 def _check_types(config: HubConfig) -> None:
@@ -106,7 +108,7 @@ def _check_types(config: HubConfig) -> None:
         value = getattr(config, name)
         if not isinstance(value, kind) or isinstance(value, bool):
             raise EdgeError(f"hub configuration: {'id' if name == 'hub_id' else name} {value!r} is not "
-                            f"{'a string' if kind is str else 'an integer' if kind is int else 'a number'}")
+                            f"{'a string' if kind is str else 'an integer' if kind is numbers.Integral else 'a number'}")
 
 
 def _toml_value(value) -> str:
