@@ -17,8 +17,10 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -53,10 +55,14 @@ def run(target: str, build: Path, seconds: int, runs: int) -> dict:
     findings.mkdir(parents=True, exist_ok=True)
     before = {p.name for p in findings.iterdir()}
     start = time.monotonic()
+    scratch = tempfile.mkdtemp(prefix=f"mocap_{target}_")  # the target's temporary files, removed after
     env = {**os.environ, "ASAN_OPTIONS": "detect_leaks=1:allocator_may_return_null=0",
-           "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1"}
-    proc = subprocess.run(command(target, build, seconds, runs, work, findings), cwd=ROOT, env=env,
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace")
+           "UBSAN_OPTIONS": "print_stacktrace=1:halt_on_error=1", "TMPDIR": scratch}
+    try:
+        proc = subprocess.run(command(target, build, seconds, runs, work, findings), cwd=ROOT, env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, errors="replace")
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
     elapsed = time.monotonic() - start
     new = sorted(p.name for p in findings.iterdir() if p.name not in before and FINDING.match(p.name))
     log = findings / "last_run.log"

@@ -26,16 +26,25 @@ void Write(const fs::path& path, std::string_view text) {
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(text.data(), text.size());
 }
 
-// A private copy of the fixture (one per process: libFuzzer's -jobs run several).
+// A private copy of the fixture (one per process: libFuzzer's -jobs run several), removed
+// when the process exits.
+struct RemovedAtExit {
+  fs::path path;
+  ~RemovedAtExit() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
 const fs::path& WorkDir() {
-  static const fs::path dir = [] {
+  static const RemovedAtExit dir{[] {
     const fs::path base = fs::exists("/dev/shm") ? "/dev/shm" : fs::temp_directory_path();
     const fs::path d = base / ("mocap_fuzz_session_" + std::to_string(getpid()));
     fs::create_directories(d);
     for (const char* f : kFiles) Write(d / f, Read(fs::path(mocap::fuzz::FixtureDir()) / f));
     return d;
-  }();
-  return dir;
+  }()};
+  return dir.path;
 }
 
 }  // namespace

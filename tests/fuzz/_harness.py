@@ -6,12 +6,17 @@ them all)."""
 
 from __future__ import annotations
 
-import shutil
 import sys
 import tempfile
 from pathlib import Path
 
 import atheris
+
+
+def scratch(prefix: str) -> Path:
+    """A temporary folder in $TMPDIR (libFuzzer ends the process without Python's exit handlers:
+    scripts/fuzz.py gives each run its own TMPDIR and removes it after)."""
+    return Path(tempfile.mkdtemp(prefix=prefix))
 
 
 def main(check, allowed: tuple[type[BaseException], ...]) -> None:
@@ -32,7 +37,7 @@ class Folder:
     for the length of a `with` block."""
 
     def __init__(self, make) -> None:
-        self.path = Path(tempfile.mkdtemp(prefix="mocap_fuzz_"))
+        self.path = scratch("mocap_fuzz_")
         make(self.path)
         self._valid = {p.relative_to(self.path): p.read_bytes() for p in self.path.rglob("*") if p.is_file()}
 
@@ -52,6 +57,3 @@ class Folder:
                 (folder.path / name).write_bytes(folder._valid[name])
 
         return _Swap()
-
-    def remove(self) -> None:
-        shutil.rmtree(self.path, ignore_errors=True)

@@ -2,9 +2,6 @@
 its joints mapped onto the solver's skeleton and its frames turned into poses). Input: the
 file's bytes. Allowed failure: InputError."""
 
-import tempfile
-from pathlib import Path
-
 import atheris
 
 with atheris.instrument_imports(include=["mocap.io"]):
@@ -13,7 +10,7 @@ with atheris.instrument_imports(include=["mocap.io"]):
 
 import _harness  # noqa: E402
 
-PATH = Path(tempfile.mkdtemp(prefix="mocap_fuzz_bvh_")) / "clip.bvh"
+PATH = _harness.scratch("mocap_fuzz_bvh_") / "clip.bvh"
 
 
 def check(data: bytes) -> None:

@@ -2,9 +2,6 @@
 file's bytes. Allowed failure: EdgeError; a configuration read is written back and read again
 to the same."""
 
-import tempfile
-from pathlib import Path
-
 import atheris
 
 with atheris.instrument_imports(include=["mocap_edge.hub"]):
@@ -13,7 +10,7 @@ with atheris.instrument_imports(include=["mocap_edge.hub"]):
 
 import _harness  # noqa: E402
 
-PATH = Path(tempfile.mkdtemp(prefix="mocap_fuzz_hub_")) / "hub.toml"
+PATH = _harness.scratch("mocap_fuzz_hub_") / "hub.toml"
 
 
 def check(data: bytes) -> None:
