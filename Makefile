@@ -1,8 +1,10 @@
 # The project's commands. See README.md.
 PY     := $(CURDIR)/.venv/bin/python
 BUILD  := build
+FUZZ_BUILD   := build-fuzz
+FUZZ_SECONDS := 60
 
-.PHONY: setup build test bench demo lint clean
+.PHONY: setup build fuzz-build fuzz test bench demo lint clean
 
 setup:            ## install Debian + pinned PyPI dependencies, create .venv (idempotent; root)
 	bash scripts/setup.sh
@@ -12,8 +14,18 @@ build:            ## configure and build the C++ host library, tests and Python 
 	cmake -S . -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
 	cmake --build $(BUILD)
 
-test: setup build ## every test of every part (installs what is missing first)
+fuzz-build:       ## the libFuzzer targets (clang, ASan + UBSan) in their own build directory
+	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -G Ninja -DMOCAP_FUZZ=ON \
+	  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
+	cmake --build $(FUZZ_BUILD)
+
+fuzz: fuzz-build  ## every fuzz target for FUZZ_SECONDS each: one JSON line per target
+	nice -n 5 $(PY) scripts/fuzz.py --build $(FUZZ_BUILD) --seconds $(FUZZ_SECONDS)
+
+test: setup build fuzz-build ## every test of every part (installs what is missing first)
 	ctest --test-dir $(BUILD) --output-on-failure
+	ctest --test-dir $(FUZZ_BUILD) --output-on-failure
 	$(PY) -m pytest -q
 
 demo: setup build ## the live demo on a simulated studio: out/demo.bvh, out/report.md
@@ -23,7 +35,7 @@ bench: build      ## benchmarks, one JSON object per line
 	@OPENBLAS_NUM_THREADS=1 $(PY) -m mocap.cli bench
 
 clean:
-	rm -rf build
+	rm -rf build $(FUZZ_BUILD)
 
 lint:             ## formatting of the C++ code, static checks of the Python code, its rooms and sizes, options declared everywhere
 	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')

@@ -10,6 +10,7 @@ DEBIAN_PACKAGES=(
   protobuf-compiler libprotobuf-dev libzmq3-dev cppzmq-dev
   python3 python3-dev python3-venv
   gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm libcmocka-dev
+  clang libclang-rt-14-dev
 )
 
 missing=()

@@ -102,5 +102,27 @@ TEST_F(QueueTest, SensorsACalibrationLeavesOutKeepTheirPlaceUncalibrated) {
   }
 }
 
+// A calibrator's JSON with a value of the wrong type where a string or number is read (the
+// format, a name, the reference height) is refused with an error: the readers threw, and the
+// exception would have ended mocapd.
+TEST_F(QueueTest, FieldsOfTheWrongTypeAreRefusedNotThrown) {
+  using Field = std::string* (v1::Calibration::*)();
+  const std::vector<std::pair<Field, std::string>> cases = {
+      {&v1::Calibration::mutable_skeleton_json, R"({"format": 1, "bones": []})"},
+      {&v1::Calibration::mutable_layout_json,
+       R"({"format": "mocap.layout/1", "keypoints": [], "name": 3})"},
+      {&v1::Calibration::mutable_layout_json,
+       R"({"format": "mocap.layout/1", "keypoints": [], "reference_height": "x"})"},
+      {&v1::Calibration::mutable_imus_json,
+       R"({"format": "mocap.imus/1", "imus": [{"name": 7}]})"}};
+  for (const auto& [field, json] : cases) {
+    v1::Calibration c = CalibrationOf(scene, 0, 1);
+    *(c.*field)() = json;
+    std::string error;
+    EXPECT_FALSE(queue.Add(c, *solver, &error)) << json;
+    EXPECT_NE(error.find("malformed field"), std::string::npos) << error;
+  }
+}
+
 }  // namespace
 }  // namespace mocap

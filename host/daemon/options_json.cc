@@ -98,7 +98,7 @@ bool ReadFields(const json& j, const std::string& prefix, T* options, std::strin
   }
   for (const auto& [key, value] : j.items()) {
     bool known = false, ok = true;
-    T::VisitFields([&, key = key](const char* name, auto member) {
+    T::VisitFields([&, key = key, &value = value](const char* name, auto member) {
       if (known || key != name) return;
       known = true;
       ok = ReadField(value, prefix + key, &(options->*member), error);
@@ -177,7 +177,7 @@ bool ReadSyncOptions(const json& j, SyncOptions* sync, std::string* error) {
   if (!j.is_object()) return *error = "sync must be an object", false;
   for (const auto& [key, value] : j.items()) {
     bool known = false;
-    SyncOptions::VisitFields([&, key = key](const char* name, auto member) {
+    SyncOptions::VisitFields([&, key = key, &value = value](const char* name, auto member) {
       const std::string k = SyncKey(name);
       if (known || k.empty() || k != key) return;
       known = true;

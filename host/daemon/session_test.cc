@@ -112,5 +112,31 @@ TEST(Session, RepeatedNamesAndAnEmptyLayoutAreRefusedAtLoad) {
   }
 }
 
+// A session naming a device or a huge file is refused before it is read: reading /dev/zero
+// would never end, and a huge file would be held in memory whole.
+TEST(Session, DevicesAndHugeFilesAreRefused) {
+  Session s;
+  std::string error;
+  EXPECT_FALSE(LoadSession(WriteSession({{"skeleton", "/dev/zero"}}), &s, &error));
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  const std::string huge = ::testing::TempDir() + "/huge.json";
+  std::ofstream(huge) << std::string(16u << 20, ' ') << "{}";
+  EXPECT_FALSE(LoadSession(WriteSession({{"prior", huge}}), &s, &error));
+  EXPECT_NE(error.find("larger than 16 MiB"), std::string::npos) << error;
+  EXPECT_FALSE(LoadSession("/dev/zero", &s, &error));
+}
+
+// A prior's dof is checked against its mean before anything is allocated by it (a dof of
+// 2e9 asked for 16 GB).
+TEST(Session, APriorsDofIsCappedBeforeItIsAllocated) {
+  const std::string prior = ::testing::TempDir() + "/prior.json";
+  std::ofstream(prior) << R"({"format": "mocap.prior/1", "dof": 2000000000, "mean": [0],
+                             "basis": [[1]], "sigma": [1]})";
+  Session s;
+  std::string error;
+  EXPECT_FALSE(LoadSession(WriteSession({{"prior", prior}}), &s, &error));
+  EXPECT_NE(error.find("dof <= 1024"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace mocap

@@ -24,7 +24,14 @@ bool AllFinite(const Values& values) {
 DropReason Check(const v1::KeypointFrame& m, std::string* detail) {
   if (m.camera_id().empty())
     return *detail = "KeypointFrame without camera_id", DropReason::kInvalid;
+  if (m.persons_size() > kMaxPersons)
+    return *detail = m.camera_id() + ": " + std::to_string(m.persons_size()) + " persons",
+           DropReason::kInvalid;
   for (const auto& p : m.persons()) {
+    if (p.x_size() > kMaxKeypoints) {
+      *detail = m.camera_id() + ": " + std::to_string(p.x_size()) + " keypoints per person";
+      return DropReason::kInvalid;
+    }
     if (p.x_size() != p.y_size() || p.x_size() != p.confidence_size()) {
       *detail = m.camera_id() + ": x, y, confidence of different lengths";
       return DropReason::kInvalid;
@@ -38,6 +45,9 @@ DropReason Check(const v1::KeypointFrame& m, std::string* detail) {
 }
 
 DropReason Check(const v1::ImuBatch& m, std::string* detail) {
+  if (m.samples_size() > kMaxSamples)
+    return *detail = m.hub_id() + ": " + std::to_string(m.samples_size()) + " samples",
+           DropReason::kInvalid;
   for (const auto& s : m.samples()) {
     if (s.sensor_id().empty())
       return *detail = m.hub_id() + ": sample without sensor_id", DropReason::kInvalid;
@@ -56,7 +66,12 @@ DropReason Check(const v1::PoseFrame& m, std::string* detail) {
   return DropReason::kNone;
 }
 
-DropReason Check(const v1::Health&, std::string*) { return DropReason::kNone; }
+DropReason Check(const v1::Health& m, std::string* detail) {
+  if (m.streams_size() > kMaxStreams)
+    return *detail = m.source() + ": " + std::to_string(m.streams_size()) + " streams",
+           DropReason::kInvalid;
+  return DropReason::kNone;
+}
 
 DropReason Check(const v1::Calibration& m, std::string* detail) {
   if (m.skeleton_json().empty() || m.imus_json().empty() || m.layout_json().empty()) {

@@ -12,7 +12,13 @@
 namespace mocap::wire {
 
 inline constexpr std::string_view kVersion = "mocap.v1";
+// Caps on what one message may hold (docs/reliability.md, "Fuzzing"): a payload's size bounds
+// what parsing it allocates; the counts bound the work each message makes downstream.
 inline constexpr size_t kMaxPayload = 1 << 20;  // bytes
+inline constexpr int kMaxPersons = 32;          // per KeypointFrame (an edge box sends <= 2)
+inline constexpr int kMaxKeypoints = 256;       // per person (the largest layout has 33)
+inline constexpr int kMaxSamples = 4096;        // per ImuBatch (a hub's 10 ms batch: <= 300)
+inline constexpr int kMaxStreams = 1024;        // per Health
 
 enum class DropReason {
   kNone,

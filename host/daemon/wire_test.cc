@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "mocap/v1/health.pb.h"
 #include "mocap/v1/imu_batch.pb.h"
 #include "mocap/v1/keypoint_frame.pb.h"
 
@@ -77,6 +78,32 @@ TEST(Wire, BadMessagesComeBackWithTheirReason) {
   s->set_ax(0);
   s->clear_sensor_id();
   EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason,
+            DropReason::kInvalid);
+}
+
+// The caps of wire.h: a message over one of them is dropped as invalid, one at it is taken.
+TEST(Wire, MessagesOverTheCapsAreInvalid) {
+  v1::KeypointFrame frame;
+  frame.set_camera_id("cam0");
+  for (int i = 0; i < kMaxPersons; ++i) frame.add_persons();
+  EXPECT_TRUE(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).message);
+  frame.add_persons();
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason,
+            DropReason::kInvalid);
+  frame.clear_persons();
+  auto* p = frame.add_persons();
+  for (int k = 0; k <= kMaxKeypoints; ++k) p->add_x(1), p->add_y(1), p->add_confidence(1);
+  EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", frame.SerializeAsString()).reason,
+            DropReason::kInvalid);
+  v1::ImuBatch batch;
+  for (int i = 0; i <= kMaxSamples; ++i) batch.add_samples()->set_sensor_id("s");
+  EXPECT_EQ(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).reason,
+            DropReason::kInvalid);
+  batch.mutable_samples()->RemoveLast();
+  EXPECT_TRUE(DecodeMessage("mocap.v1.ImuBatch", batch.SerializeAsString()).message);
+  v1::Health health;
+  for (int i = 0; i <= kMaxStreams; ++i) health.add_streams();
+  EXPECT_EQ(DecodeMessage("mocap.v1.Health", health.SerializeAsString()).reason,
             DropReason::kInvalid);
 }
 

@@ -111,7 +111,7 @@ bool Camera::IsValid(std::string* error) const {
   return true;
 }
 
-bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
+static bool ParseRigJsonUnguarded(const std::string& text, Rig* out, std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.rig/1" || !j.contains("cameras") ||
@@ -153,6 +153,10 @@ bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
   }
   *out = std::move(rig);
   return true;
+}
+
+bool ParseRigJson(const std::string& text, Rig* out, std::string* error) {
+  return internal::Guarded(error, [&] { return ParseRigJsonUnguarded(text, out, error); });
 }
 
 bool LoadRigJson(const std::string& path, Rig* out, std::string* error) {

@@ -3,6 +3,8 @@
 #define MOCAP_SRC_JSON_UTIL_H_
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -11,10 +13,22 @@
 namespace mocap {
 namespace internal {
 
+// The largest file the host reads (session, skeleton, rig, layout, IMU set, prior: the
+// shipped prior, the largest, is 25 kB): a path naming a device or a huge file is refused
+// before it is read (docs/reliability.md, "Fuzzing").
+inline constexpr std::uintmax_t kMaxTextFileBytes = 16u << 20;
+
 inline bool ReadTextFile(const std::string& path, std::string* text, std::string* error) {
+  std::error_code ec;
+  const bool regular = std::filesystem::is_regular_file(path, ec);
+  const std::uintmax_t size = regular ? std::filesystem::file_size(path, ec) : 0;
+  if (regular && !ec && size > kMaxTextFileBytes) {
+    *error = path + " is larger than " + std::to_string(kMaxTextFileBytes >> 20) + " MiB";
+    return false;
+  }
   std::ifstream in(path);
-  if (!in) {
-    *error = "cannot open " + path;
+  if (!in || !regular || ec) {
+    *error = "cannot open " + path + (in && !regular ? " (not a regular file)" : "");
     return false;
   }
   std::stringstream ss;
@@ -43,6 +57,19 @@ inline bool ParseJson(const std::string& text, nlohmann::json* out, std::string*
     return false;
   }
   return true;
+}
+
+// Runs parse(), a reader of JSON that checks each value's type before it reads it; a lookup
+// that still meets a value of another type (nlohmann throws then, e.g. value() of a number
+// as a string) is an error with its message, so the Parse*Json functions never throw.
+template <typename Parse>
+bool Guarded(std::string* error, Parse parse) {
+  try {
+    return parse();
+  } catch (const nlohmann::json::exception& e) {
+    *error = std::string("malformed field: ") + e.what();
+    return false;
+  }
 }
 
 // Reads a JSON array of n finite numbers.

@@ -21,7 +21,8 @@ bool PosePrior::IsValid(std::string* error) const {
   return true;
 }
 
-bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* error) {
+static bool ParsePosePriorJsonUnguarded(const std::string& text, PosePrior* out,
+                                        std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.prior/1" || !j.contains("dof") ||
@@ -30,10 +31,13 @@ bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* er
     *error = "not a mocap.prior/1 file";
     return false;
   }
-  const int d = j["dof"].get<int>();
-  const int k = static_cast<int>(j["basis"].size());
-  if (d <= 0 || k <= 0) {
-    *error = "prior needs dof > 0 and at least one component";
+  // dof is checked against the mean's length before anything is allocated by it.
+  const int64_t d = j["dof"].get<int64_t>();
+  const int64_t k = static_cast<int64_t>(j["basis"].size());
+  if (d <= 0 || k <= 0 || d > kMaxPriorDof || k > d || !j["mean"].is_array() ||
+      static_cast<int64_t>(j["mean"].size()) != d) {
+    *error = "prior needs 0 < components <= dof <= " + std::to_string(kMaxPriorDof) +
+             " and a mean of dof values";
     return false;
   }
   PosePrior prior;
@@ -54,6 +58,10 @@ bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* er
   if (!prior.IsValid(error)) return false;
   *out = std::move(prior);
   return true;
+}
+
+bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* error) {
+  return internal::Guarded(error, [&] { return ParsePosePriorJsonUnguarded(text, out, error); });
 }
 
 bool LoadPosePriorJson(const std::string& path, PosePrior* out, std::string* error) {

@@ -32,8 +32,8 @@ bool ReadOptionalVector3(const nlohmann::json& j, const char* key, Eigen::Vector
 
 }  // namespace
 
-bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, KeypointLayout* out,
-                             std::string* error) {
+static bool ParseKeypointLayoutJsonUnguarded(const std::string& text, const Skeleton& skeleton,
+                                             KeypointLayout* out, std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.layout/1" || !j.contains("keypoints") ||
@@ -63,6 +63,12 @@ bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, 
   return true;
 }
 
+bool ParseKeypointLayoutJson(const std::string& text, const Skeleton& skeleton, KeypointLayout* out,
+                             std::string* error) {
+  return internal::Guarded(
+      error, [&] { return ParseKeypointLayoutJsonUnguarded(text, skeleton, out, error); });
+}
+
 bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton, KeypointLayout* out,
                             std::string* error) {
   return internal::LoadFile(path, error, [&](const std::string& text) {
@@ -70,8 +76,8 @@ bool LoadKeypointLayoutJson(const std::string& path, const Skeleton& skeleton, K
   });
 }
 
-bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::vector<ImuSite>* out,
-                       std::string* error) {
+static bool ParseImuSitesJsonUnguarded(const std::string& text, const Skeleton& skeleton,
+                                       std::vector<ImuSite>* out, std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.imus/1" || !j.contains("imus") ||
@@ -97,6 +103,12 @@ bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::v
   }
   *out = std::move(sites);
   return true;
+}
+
+bool ParseImuSitesJson(const std::string& text, const Skeleton& skeleton, std::vector<ImuSite>* out,
+                       std::string* error) {
+  return internal::Guarded(error,
+                           [&] { return ParseImuSitesJsonUnguarded(text, skeleton, out, error); });
 }
 
 bool LoadImuSitesJson(const std::string& path, const Skeleton& skeleton, std::vector<ImuSite>* out,

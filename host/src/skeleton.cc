@@ -65,7 +65,7 @@ double Skeleton::RestHeight() const {
   return hi - lo;
 }
 
-bool ParseSkeletonJson(const std::string& text, Skeleton* out, std::string* error) {
+static bool ParseSkeletonJsonUnguarded(const std::string& text, Skeleton* out, std::string* error) {
   nlohmann::json j;
   if (!internal::ParseJson(text, &j, error)) return false;
   if (!j.is_object() || j.value("format", "") != "mocap.skeleton/1") {
@@ -105,6 +105,10 @@ bool ParseSkeletonJson(const std::string& text, Skeleton* out, std::string* erro
     bones.push_back(std::move(bone));
   }
   return Skeleton::Create(std::move(bones), out, error);
+}
+
+bool ParseSkeletonJson(const std::string& text, Skeleton* out, std::string* error) {
+  return internal::Guarded(error, [&] { return ParseSkeletonJsonUnguarded(text, out, error); });
 }
 
 bool LoadSkeletonJson(const std::string& path, Skeleton* out, std::string* error) {

@@ -211,6 +211,24 @@ def test_hub_toml_is_checked(tmp_path):
             HubConfig.load(path)
 
 
+def test_hub_toml_of_any_bytes_is_read_or_refused_with_edge_error(tmp_path):
+    """Inputs the fuzzer found (tests/fuzz/fuzz_hub_config.py): bytes that are not UTF-8, values
+    of the wrong type and tables that are not tables are refused with EdgeError; a name with
+    quotes, backslashes or control characters is written back so that it reads the same."""
+    path = tmp_path / "hub.toml"
+    for data, what in ((b'[nodes]\n1\x15\x00\x00\x00p\xddlvis"\n', "codec"),
+                       (b'[hub]\nrate_hz = "60"\n', "rate_hz '60' is not an integer"),
+                       (b"[hub]\nmode = true\n", "mode True is not a string"),
+                       (b"[hub]\nrate_hz = 60.5\n", "rate_hz 60.5 is not an integer"),
+                       (b"hub = 3\n", r"\[hub\] is not a table"), (b"[nodes]\n1 = 2\n", "sensor names")):
+        path.write_bytes(data)
+        with pytest.raises(EdgeError, match=what):
+            HubConfig.load(path)
+    config = HubConfig({1: 'a"b\\c\x7f', 2: "d'e"}, hub_id="x\ny")
+    path.write_text(config.to_toml())
+    assert HubConfig.load(path) == config
+
+
 def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
     """Real time, python-can's virtual bus: the hub's service sends Syncs and the configuration,
     simulated nodes (started idle) answer, and ImuBatches come out with every named node's

@@ -22,7 +22,9 @@ struct PosePrior {
 };
 
 // Prior file: {"format": "mocap.prior/1", "dof": d, "mean": [d numbers],
-//   "basis": [k arrays of d numbers, one per component], "sigma": [k numbers]}
+//   "basis": [k arrays of d numbers, one per component], "sigma": [k numbers]},
+// 0 < k <= d <= kMaxPriorDof (a pose has 66), so a file allocates at most 8 MiB.
+inline constexpr int kMaxPriorDof = 1024;
 bool LoadPosePriorJson(const std::string& path, PosePrior* out, std::string* error);
 bool ParsePosePriorJson(const std::string& text, PosePrior* out, std::string* error);
 std::string PosePriorToJson(const PosePrior& prior);

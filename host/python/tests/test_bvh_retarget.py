@@ -118,6 +118,27 @@ def test_malformed_files_raise_input_errors():
         retarget.map_joints(motion)
 
 
+def test_any_bytes_are_a_clip_or_an_input_error(tmp_path):
+    """Inputs the fuzzer found (tests/fuzz/fuzz_bvh.py) and the caps they led to: bytes that are
+    not UTF-8, counts that are not whole numbers, unknown channels, non-finite offsets, a frame
+    count beyond the file's values (a clip without channels once allocated any count declared)."""
+    path = tmp_path / "clip.bvh"
+    path.write_bytes(CLIP.encode() + b"\xc6\x00")
+    with pytest.raises(InputError, match="cannot read"):
+        bvh.load(path)
+    zeros = "\n".join(" ".join(["0"] * WIDTH) for _ in range(2))
+    for text, what in ((CLIP.replace("CHANNELS 6", "CHANNELS six", 1), "not a whole number"),
+                       (CLIP.replace("CHANNELS 6", "CHANNELS 7", 1), "not a whole number 0..6"),
+                       (CLIP.replace("Zrotation", "Wrotation", 1), "are not"),
+                       (CLIP.replace("OFFSET 0 10 0", "OFFSET 0 nan 0", 1), "finite"),
+                       (CLIP.replace("Frames: 2", "Frames: -2"), "not a whole number"),
+                       (CLIP.replace("Frames: 2", "Frames: 99999999999"), "not a whole number"),
+                       (CLIP.replace("Frame Time: 0.0083333", "Frame Time: x"), "numbers"),
+                       ("HIERARCHY ROOT a { OFFSET 0 0 0 } MOTION Frames: 0 Frame Time: 1", "frames present")):
+        with pytest.raises(InputError, match=what):
+            bvh.parse(text + zeros)
+
+
 def test_real_clips_of_every_convention_map(shared):
     for relative in ("data/mocap/cmu-131/131_01.bvh", "data/mocap/cmu-daz/05_01.bvh", "data/mocap/xia/neutral_01_000.bvh"):
         motion = bvh.load(shared / relative)

@@ -234,6 +234,16 @@ def test_vmc_send_failures_are_counted_not_raised(skeleton):
     refused.close()
 
 
+def test_vmc_values_beyond_float32_are_skipped_not_raised(skeleton):
+    """Inputs the fuzzer found (tests/fuzz/fuzz_vmc.py): a finite root position or time beyond
+    float32's range, which OSC's 'f' cannot carry, made struct raise OverflowError."""
+    with VmcSender(skeleton, port=9) as sender:
+        far = np.zeros(skeleton.pose_dim)
+        far[0] = 1e39
+        assert not sender.send(far, 0.0) and sender.skipped == 1
+        assert not sender.send(np.zeros(skeleton.pose_dim), 1e39) and sender.skipped == 2
+
+
 def test_positions_csv_writes_published_bones_and_refuses_what_is_not_finite(tmp_path, skeleton, fk):
     """The bones as the host published them (each frame with the calibration in use then)."""
     from mocap.io.joints_csv import write_positions_csv

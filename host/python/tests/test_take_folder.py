@@ -1,5 +1,6 @@
 import json
 import os
+import re
 import shutil
 
 import numpy as np
@@ -182,6 +183,29 @@ def test_truncated_json(take_dir):
     path = take_dir / "pose" / "cam2" / "cam2_000000000000_keypoints.json"
     path.write_text(path.read_text()[:100])
     _raises(take_dir, path, 1, 101, match="invalid JSON")
+
+
+def test_any_bytes_in_a_file_are_a_take_error(take_dir):
+    """Inputs the fuzzer found (tests/fuzz/fuzz_take.py) and the caps they led to: bytes that
+    are not UTF-8, integers beyond float's range, a camera size that is not a number of
+    pixels, more people than a pose file may hold; each is a TakeError naming its file."""
+    pose = take_dir / "pose" / "cam2" / "cam2_000000000000_keypoints.json"
+    calib = take_dir / "Calib.toml"
+    toml_text, calib_text, pose_text = (take_dir / "take.toml").read_text(), calib.read_text(), pose.read_text()
+    cases = [(take_dir / "take.toml", toml_text.encode() + b"\n# \xdd\n", "cannot read"),
+             (take_dir / "take.toml", toml_text.replace("n_frames = 115", "n_frames = 1" + "0" * 400).encode(),
+              "n_frames"),
+             (calib, calib_text.encode() + b"\xff", "codec"),
+             (calib, re.sub(r"size = \[[^\]]*\]", "size = [inf, 720]", calib_text, count=1).encode(),
+              "malformed field"),
+             (calib, re.sub(r"size = \[[^\]]*\]", "size = [1e12, 720]", calib_text, count=1).encode(),
+              "is not 1..65536 pixels"),
+             (pose, b'{"people": [{"pose_keypoints_2d": [1' + b"0" * 400 + b"]}]}", "is not 99 numbers"),
+             (pose, b'{"people": [' + b", ".join([b"{}"] * 101) + b"]}", "101 people")]
+    for path, data, what in cases:
+        path.write_bytes(data)
+        _raises(take_dir, path, match=what)
+        path.write_text({take_dir / "take.toml": toml_text, calib: calib_text, pose: pose_text}[path])
 
 
 def test_wrong_keypoint_count_in_json(take_dir):

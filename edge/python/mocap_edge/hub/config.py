@@ -6,11 +6,14 @@ CAN bus loaded above bus_budget.MAX_LOAD are refused when it is read."""
 from __future__ import annotations
 
 import dataclasses
+import numbers
 import tomllib
 from pathlib import Path
 
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub import bus_budget
+
+MAX_FILE_BYTES = 1 << 20  # hub.toml is read whole
 
 
 @dataclasses.dataclass
@@ -32,6 +35,7 @@ class HubConfig:
 
     def __post_init__(self):
         """EdgeError for a value the nodes refuse, or a bus loaded above bus_budget.MAX_LOAD."""
+        _check_types(self)
         problems = [what for bad, what in (
             (not 1 <= self.rate_hz <= 400, f"rate_hz {self.rate_hz} is not 1..400"),
             (self.acc_range_g not in (2, 4, 8, 16), f"acc_range_g {self.acc_range_g} is not 2, 4, 8 or 16"),
@@ -50,14 +54,21 @@ class HubConfig:
     @classmethod
     def load(cls, path: Path) -> HubConfig:
         try:
+            if Path(path).stat().st_size > MAX_FILE_BYTES:
+                raise EdgeError(f"{path}: larger than {MAX_FILE_BYTES >> 10} KiB")
             data = tomllib.loads(Path(path).read_text())
-        except (OSError, tomllib.TOMLDecodeError) as e:
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
             raise EdgeError(f"{path}: {e}") from None
         hub, nodes = data.get("hub", {}), data.get("nodes", {})
+        bad_table = next((t for t in ("hub", "nodes", "i2c") if not isinstance(data.get(t, {}), dict)), None)
+        if bad_table:
+            raise EdgeError(f"{path}: [{bad_table}] is not a table")
         known = {f.name for f in dataclasses.fields(cls)} - {"names", "i2c", "hub_id"} | {"id"}
         unknown = sorted(set(hub) - known) + sorted(set(data) - {"hub", "nodes", "i2c"})
         if unknown:
             raise EdgeError(f"{path}: unknown key {unknown[0]!r}")
+        if not all(isinstance(v, str) for v in [*nodes.values(), *data.get("i2c", {}).values()]):
+            raise EdgeError(f"{path}: [nodes] and [i2c] values are sensor names (strings)")
         try:
             names = {int(k): str(v) for k, v in nodes.items()}
         except ValueError:
@@ -78,8 +89,31 @@ class HubConfig:
         """hub.toml's text for this configuration (load() reads it back)."""
         hub = {("id" if f.name == "hub_id" else f.name): getattr(self, f.name)
                for f in dataclasses.fields(self) if f.name not in ("names", "i2c")}
-        lines = ["[hub]", *(f"{k} = {v!r}".replace("'", '"') for k, v in hub.items()), "", "[nodes]",
-                 *(f'{k} = "{v}"' for k, v in sorted(self.names.items()))]
+        lines = ["[hub]", *(f"{k} = {_toml_value(v)}" for k, v in hub.items()), "", "[nodes]",
+                 *(f"{k} = {_toml_value(v)}" for k, v in sorted(self.names.items()))]
         if self.i2c:
-            lines += ["", "[i2c]", *(f'"0x{k:02x}" = "{v}"' for k, v in sorted(self.i2c.items()))]
+            lines += ["", "[i2c]", *(f'"0x{k:02x}" = {_toml_value(v)}' for k, v in sorted(self.i2c.items()))]
         return "\n".join(lines) + "\n"
+
+
+# The type of each setting of [hub]: a value of another type (a string rate, a boolean
+# mode) is refused by name rather than failing a comparison.
+_KINDS = {"hub_id": str, "rate_hz": numbers.Integral, "acc_range_g": numbers.Integral,
+          "gyro_range_dps": numbers.Integral, "mode": str, "sync_hz": numbers.Real, "batch_ms": numbers.Real,
+          "stale_s": numbers.Real, "late_ms": numbers.Real}
+
+
+def _check_types(config: HubConfig) -> None:
+    for name, kind in _KINDS.items():
+        value = getattr(config, name)
+        if not isinstance(value, kind) or isinstance(value, bool):
+            raise EdgeError(f"hub configuration: {'id' if name == 'hub_id' else name} {value!r} is not "
+                            f"{'a string' if kind is str else 'an integer' if kind is numbers.Integral else 'a number'}")
+
+
+def _toml_value(value) -> str:
+    """A TOML value: a basic string with every quote, backslash and control character escaped."""
+    if not isinstance(value, str):
+        return repr(value).replace("'", '"')
+    escaped = "".join(f"\\u{ord(c):04x}" if c in '"\\' or ord(c) < 0x20 or ord(c) == 0x7F else c for c in value)
+    return f'"{escaped}"'

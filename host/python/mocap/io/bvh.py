@@ -13,6 +13,9 @@ import numpy as np
 
 from mocap.errors import InputError
 
+MAX_FILE_BYTES = 256 << 20  # a BVH file read whole (the CMU clips are 1-5 MB)
+CHANNEL_NAMES = {f"{axis}{kind}".lower() for axis in "XYZ" for kind in ("position", "rotation")}
+
 
 @dataclasses.dataclass
 class Joint:
@@ -101,9 +104,19 @@ class _Tokens:
 
     def floats(self, k: int) -> np.ndarray:
         try:
-            return np.array([float(self.take()) for _ in range(k)])
+            values = np.array([float(self.take()) for _ in range(k)])
         except ValueError as e:
             raise InputError(f"{self.source}: expected {k} numbers: {e}") from None
+        if not np.isfinite(values).all():
+            raise InputError(f"{self.source}: expected {k} finite numbers, not {values}")
+        return values
+
+    def count(self, what: str, most: int) -> int:
+        """A whole number 0..most."""
+        token = self.take()
+        if not token.isdecimal() or int(token) > most:
+            raise InputError(f"{self.source}: {what} {token!r} is not a whole number 0..{most}")
+        return int(token)
 
     def expect(self, *words: str, what: str) -> None:
         if any(self.take() != w for w in words):
@@ -119,7 +132,9 @@ def _joint(t: _Tokens, keyword: str, parent: int) -> Joint:
     channels: list[str] = []
     if t.peek() == "CHANNELS":
         t.take()
-        channels = [t.take() for _ in range(int(t.take()))]
+        channels = [t.take() for _ in range(t.count(f"CHANNELS of {name}", 6))]
+        if any(c.lower() not in CHANNEL_NAMES for c in channels):
+            raise InputError(f"{t.source}: channels of {name} {channels} are not [XYZ]position / [XYZ]rotation")
     return Joint(name, parent, offset, channels)
 
 
@@ -154,18 +169,29 @@ def parse(text: str, source: str = "<bvh>") -> Motion:
     t = _Tokens(text, source)
     joints = _hierarchy(t)
     t.expect("Frames:", what="expected 'Frames:'")
-    frames = int(t.take())
+    body_size = len(t.tokens) - t.pos
+    frames = t.count("Frames:", body_size)  # each frame holds at least one value
     t.expect("Frame", "Time:", what="expected 'Frame Time:'")
-    frame_time = float(t.take())
+    frame_time = t.floats(1)[0]
     width = sum(len(j.channels) for j in joints)
     body = t.tokens[t.pos:]
-    if len(body) < frames * width:
+    if width == 0 or len(body) < frames * width:
         raise InputError(f"{source}: {len(body) // max(width, 1)} frames present, {frames} declared")
-    values = np.asarray(body[: frames * width], dtype=float).reshape(frames, width)
+    try:
+        values = np.asarray(body[: frames * width], dtype=float).reshape(frames, width)
+    except ValueError as e:
+        raise InputError(f"{source}: motion values: {e}") from None
     if not np.isfinite(values).all() or not frame_time > 0:
         raise InputError(f"{source}: non-finite motion values or frame time")
     return Motion(joints, frame_time, values)
 
 
 def load(path: str | Path) -> Motion:
-    return parse(Path(path).read_text(), str(path))
+    """The BVH file at `path`; InputError when it cannot be read or parsed."""
+    try:
+        if Path(path).stat().st_size > MAX_FILE_BYTES:
+            raise InputError(f"{path}: larger than {MAX_FILE_BYTES >> 20} MiB")
+        text = Path(path).read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"{path}: cannot read: {e}") from None
+    return parse(text, str(path))

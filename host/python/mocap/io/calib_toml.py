@@ -17,6 +17,9 @@ import numpy as np
 from mocap import _core, rotations
 from mocap.errors import InputError
 
+MAX_FILE_BYTES = 1 << 20  # a Calib.toml (a few hundred bytes a camera)
+MAX_IMAGE_SIDE = 1 << 16  # pixels
+
 
 def _camera(key: str, table: dict) -> _core.Camera:
     try:
@@ -25,8 +28,10 @@ def _camera(key: str, table: dict) -> _core.Camera:
         dist = [float(v) for v in table["distortions"]]
         rvec = np.asarray(table["rotation"], dtype=float)
         tvec = np.asarray(table["translation"], dtype=float)
-    except (KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError, OverflowError) as e:
         raise InputError(f"camera [{key}]: missing or malformed field ({e})") from None
+    if not all(0 < v <= MAX_IMAGE_SIDE for v in size):
+        raise InputError(f"camera [{key}]: size {size} is not 1..{MAX_IMAGE_SIDE} pixels a side")
     if table.get("fisheye", False):
         raise InputError(f"camera [{key}]: fisheye cameras are not supported")
     if k.shape != (3, 3) or rvec.shape != (3,) or tvec.shape != (3,) or len(dist) not in (4, 5) or len(size) != 2:
@@ -41,13 +46,21 @@ def _camera(key: str, table: dict) -> _core.Camera:
     return cam
 
 
-def load(path: str | Path) -> _core.Rig:
-    if not Path(path).is_file():  # a FIFO would block the read
-        raise InputError(f"{path}: not found or not a regular file")
+def read(path: str | Path) -> dict:
+    """The TOML of `path`; InputError when it is not a regular file (a FIFO would block the
+    read), too large, unreadable or not TOML."""
     try:
-        data = tomllib.loads(Path(path).read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        if not Path(path).is_file():
+            raise InputError(f"{path}: not found or not a regular file")
+        if Path(path).stat().st_size > MAX_FILE_BYTES:
+            raise InputError(f"{path}: larger than {MAX_FILE_BYTES >> 10} KiB")
+        return tomllib.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
         raise InputError(f"{path}: not a TOML file ({e})") from None
+
+
+def load(path: str | Path) -> _core.Rig:
+    data = read(path)
     cams = [_camera(key, t) for key, t in data.items() if key != "metadata" and isinstance(t, dict)]
     if not cams:
         raise InputError(f"{path}: no camera tables")

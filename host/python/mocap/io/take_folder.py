@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import re
 import stat
@@ -39,6 +40,11 @@ SEGMENT_BONES = {"head": "head", "upper_back": "spine_upper", "pelvis": "pelvis"
 # mirrored) taking +Y up to +Z, +Z to +X and +X to +Y (as mocap.io.retarget and Pose2Sim's TRC).
 WORLD_FROM_Y_UP = retarget.P
 PIXEL_DECIMALS, CONFIDENCE_DECIMALS = 3, 4  # as written in the JSON
+# Caps (docs/reliability.md, "Fuzzing"): each file is read whole, and a pose file's people
+# are held as (people, keypoints, 3) floats.
+MAX_TOML_BYTES = 1 << 20
+MAX_POSE_FILE_BYTES = 16 << 20
+MAX_PEOPLE = 100  # per pose file (OpenPose finds a crowd's tens)
 
 
 @dataclasses.dataclass
@@ -76,6 +82,8 @@ class _Toml:
         self.path = path
         regular_file(path, path)
         try:
+            if path.stat().st_size > MAX_TOML_BYTES:
+                raise TakeError(path, f"larger than {MAX_TOML_BYTES >> 10} KiB")
             self.text = path.read_text()
             self.data = tomllib.loads(self.text)
         except OSError as e:
@@ -153,7 +161,10 @@ def inside(root: Path, name: str, where: Path, what: str, line: int | None = Non
 
 
 def _positive(v) -> bool:
-    return v > 0 and np.isfinite(v)
+    try:
+        return 0 < float(v) < math.inf
+    except OverflowError:  # an integer beyond float's range
+        return False
 
 
 def _strings(v) -> bool:
@@ -209,10 +220,8 @@ def _read_video(folder: Path, toml: _Toml, n_frames: int, world_from_take: np.nd
 def _rig(calib: Path, names: list[str], world_from_take: np.ndarray) -> _core.Rig:
     regular_file(calib, calib, "calibration file")
     try:
-        data = tomllib.loads(calib.read_text())
+        data = calib_toml.read(calib)
         rig = calib_toml.load(calib)
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
-        raise TakeError(calib, f"not a TOML file ({e})") from None
     except InputError as e:
         raise TakeError(calib, str(e).removeprefix(f"{calib}: ")) from None
     keys = [k for k, t in data.items() if k != "metadata" and isinstance(t, dict)]
@@ -251,6 +260,8 @@ def _read_poses(folder: Path, pose_dir: Path, n_frames: int, n_keypoints: int) -
 def _read_pose(path: Path, n_keypoints: int) -> np.ndarray:
     """(P, K, 3) of one OpenPose JSON file."""
     try:
+        if path.stat().st_size > MAX_POSE_FILE_BYTES:
+            raise TakeError(path, f"larger than {MAX_POSE_FILE_BYTES >> 20} MiB")
         data = json.loads(path.read_text())
     except json.JSONDecodeError as e:
         raise TakeError(path, f"invalid JSON: {e.msg}", e.lineno, e.colno) from None
@@ -259,12 +270,14 @@ def _read_pose(path: Path, n_keypoints: int) -> np.ndarray:
     people = data.get("people") if isinstance(data, dict) else None
     if not isinstance(people, list):
         raise TakeError(path, 'no "people" list')
+    if len(people) > MAX_PEOPLE:
+        raise TakeError(path, f"{len(people)} people, more than {MAX_PEOPLE}")
     out = np.zeros((len(people), n_keypoints, 3))
     for p, person in enumerate(people):
         values = person.get("pose_keypoints_2d") if isinstance(person, dict) else None
         try:
             out[p] = np.asarray(values, dtype=float).reshape(n_keypoints, 3)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise TakeError(path, f"people[{p}].pose_keypoints_2d is not {3 * n_keypoints} numbers "
                             f"(x, y, confidence for each of the layout's {n_keypoints} keypoints)") from None
         if not np.isfinite(out[p]).all():

@@ -32,6 +32,7 @@ QUAT = ["Quat_q0", "Quat_q1", "Quat_q2", "Quat_q3"]
 MAT = [f"Mat[{i}][{j}]" for i in (1, 2, 3) for j in (1, 2, 3)]  # row-major
 ACC = ["Acc_X", "Acc_Y", "Acc_Z"]
 UNIT_TOLERANCE = 0.01  # |q| or det(Mat) this far from 1 is refused
+MAX_FILE_BYTES = 256 << 20  # a table read whole (an hour of one IMU at 100 Hz: ~70 MB)
 
 
 @dataclasses.dataclass
@@ -74,6 +75,8 @@ class Table:
 
 def read_table(path: Path) -> Table:
     try:
+        if Path(path).stat().st_size > MAX_FILE_BYTES:
+            raise TakeError(path, f"larger than {MAX_FILE_BYTES >> 20} MiB")
         text = Path(path).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as e:
         raise TakeError(path, f"cannot read: {e}") from None

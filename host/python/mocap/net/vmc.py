@@ -78,7 +78,8 @@ class VmcSender:
     """Sends poses theta to a VMC receiver over UDP; never raises on a failed send.
 
     Counters: `sent` datagrams handed to the network, `failures` sends the OS refused
-    (no route, bad host, socket closed...), `skipped` frames with a non-finite theta or time.
+    (no route, bad host, socket closed...), `skipped` frames with a non-finite theta or time, or
+    a position or time beyond float32's range (OSC's 'f').
     """
 
     def __init__(self, skeleton, host: str = "127.0.0.1", port: int = DEFAULT_PORT):
@@ -113,7 +114,11 @@ class VmcSender:
         if not (np.isfinite(theta).all() and math.isfinite(time_s)):
             self.skipped += 1
             return False
-        packet = self.encode(theta, time_s)
+        try:
+            packet = self.encode(theta, time_s)
+        except OverflowError:  # struct's float32 packing of a value beyond its range
+            self.skipped += 1
+            return False
         try:
             self._socket.sendto(packet, self._address)
         except OSError as e:
