@@ -192,7 +192,7 @@ def test_any_bytes_in_a_file_are_a_take_error(take_dir):
     pose = take_dir / "pose" / "cam2" / "cam2_000000000000_keypoints.json"
     calib = take_dir / "Calib.toml"
     toml_text, calib_text, pose_text = (take_dir / "take.toml").read_text(), calib.read_text(), pose.read_text()
-    cases = [(take_dir / "take.toml", toml_text.encode() + b"\n# \xdd\n", "cannot read"),
+    cases = [(take_dir / "take.toml", toml_text.encode() + b"\n# \xdd\n", "not UTF-8 text"),
              (take_dir / "take.toml", toml_text.replace("n_frames = 115", "n_frames = 1" + "0" * 400).encode(),
               "n_frames"),
              (calib, calib_text.encode() + b"\xff", "codec"),
@@ -298,6 +298,13 @@ def test_an_imu_file_out_of_the_folder_is_refused_without_echoing_it(take_dir, t
     assert "root:x" not in str(_raises(take_dir, take_dir / "sensors.csv", 2, 3, match="outside the take folder"))
     _edit(take_dir / "take.toml", 'sensors = "sensors.csv"', f'sensors = "{secret}"')
     _raises(take_dir, take_dir / "take.toml", match=r"\[imu\] sensors .* is outside")
+
+
+def test_a_nul_byte_in_a_file_name_is_refused_by_name(take_dir):
+    """Found by the take folder's fuzzer: a NUL in sensors.csv's file column reached
+    os.path.realpath, whose ValueError escaped as a traceback."""
+    (take_dir / "sensors.csv").write_text("sensor,segment,file\nhead,head,imu/\x00head.csv\n")
+    _raises(take_dir, take_dir / "sensors.csv", 2, 3, match="IMU file .*cannot be resolved")
 
 
 @pytest.mark.parametrize("file", ["take.toml", "Calib.toml", "sensors.csv", "imu/head.csv",

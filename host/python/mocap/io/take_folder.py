@@ -140,6 +140,8 @@ def regular_file(path: Path, where: Path, what: str = "file", line: int | None =
         mode = os.stat(path).st_mode
     except OSError as e:
         raise TakeError(where, f"{what} {str(path)!r} not found ({e.strerror})", line, column) from None
+    except ValueError:  # a NUL byte: no file has such a name
+        raise TakeError(where, f"{what} {str(path)!r} is not a file name (a NUL byte)", line, column) from None
     kind = stat.S_ISDIR(mode) if folder else stat.S_ISREG(mode)
     if not kind:
         raise TakeError(where, f"{what} {str(path)!r} is not a {'folder' if folder else 'regular file'}", line, column)
@@ -153,7 +155,7 @@ def inside(root: Path, name: str, where: Path, what: str, line: int | None = Non
     path = where.parent / name
     try:
         resolved, top = path.resolve(), root.resolve()
-    except (OSError, RuntimeError) as e:  # a symlink loop
+    except (OSError, RuntimeError, ValueError) as e:  # a symlink loop, a NUL byte
         raise TakeError(where, f"{what} {name!r}: cannot be resolved ({e})", line, column) from None
     if not resolved.is_relative_to(top):
         raise TakeError(where, f"{what} {name!r} is outside the take folder (paths stay inside it)", line, column)
