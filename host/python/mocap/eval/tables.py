@@ -150,7 +150,7 @@ def _cameras_and_subsampling(r: dict) -> list[str]:
 
 
 def _cameras_lost(r: dict) -> list[str]:
-    clips = r["cameras_lost"]["results"]
+    clips = r["cameras_lost"]["clips"]
     cells, worst = [], []
     for after in evaluation.DRIFT_AFTER_S:
         e = [c["cameras_lost"][f"{after:g}s"] for c in clips if c["cameras_lost"][f"{after:g}s"] is not None]
