@@ -162,8 +162,8 @@ def _cameras_lost(r: dict) -> list[str]:
             "| joint centres (cm), mean over the clips that long (clips) | " + " | ".join(cells) + " |",
             "| worst clip (cm) | " + " | ".join(worst) + " |", "",
             "Without keypoints the root's position is dead-reckoned from the accelerometers (E_A), and every such "
-            "frame's `PoseFrame` says so (`QUALITY_POSITION_UNCONSTRAINED`). The floor (E_G, made stronger on "
-            "frames without keypoints: `ground_unobserved_gain`) holds the height; the horizontal drift is the "
+            "frame's `PoseFrame` says so (`QUALITY_POSITION_UNCONSTRAINED`). The floor (E_G, its loss widened on "
+            "frames without keypoints: `ground_unobserved_scale`) holds the height; the horizontal drift is the "
             "accelerometers' (bias, tilt error) and grows with time. When the keypoints return the pose is "
             "re-acquired from them and the drift spread over the velocity (host/README.md). "
             f"`mocap eval --motion CLIP --calibration oracle --cameras-lost-at {CAMERAS_LOST_AT_S:g} --json OUT` "
