@@ -10,20 +10,14 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "curve_test_keys.h"
+
 namespace mocap {
 namespace {
 
 using nlohmann::json;
 
-struct KeyPair {
-  std::string pub, secret;
-  KeyPair() {
-    char p[41], s[41];
-    zmq_curve_keypair(p, s);
-    pub = p;
-    secret = s;
-  }
-};
+using testing::KeyPair;
 
 // Writes text to name in the test folder with the given mode; its path.
 std::string WriteKey(const std::string& name, const std::string& text, mode_t mode) {

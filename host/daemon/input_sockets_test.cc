@@ -9,18 +9,12 @@
 #include <functional>
 #include <thread>
 
+#include "curve_test_keys.h"
+
 namespace mocap {
 namespace {
 
-struct KeyPair {
-  std::string pub, secret;
-  KeyPair() {
-    char p[41], s[41];
-    zmq_curve_keypair(p, s);
-    pub = p;
-    secret = s;
-  }
-};
+using testing::KeyPair;
 
 // A publisher on endpoint ("...:*" picks a port); secret empty: no CURVE.
 zmq::socket_t Publisher(zmq::context_t& context, const std::string& endpoint,

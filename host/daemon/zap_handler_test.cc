@@ -7,18 +7,12 @@
 
 #include <zmq_addon.hpp>
 
+#include "curve_test_keys.h"
+
 namespace mocap {
 namespace {
 
-struct KeyPair {
-  std::string pub, secret;
-  KeyPair() {
-    char p[41], s[41];
-    zmq_curve_keypair(p, s);
-    pub = p;
-    secret = s;
-  }
-};
+using testing::KeyPair;
 
 zmq::socket_t Client(zmq::context_t& context, const std::string& endpoint, const KeyPair& own,
                      const std::string& server) {
