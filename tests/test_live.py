@@ -58,9 +58,14 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     assert np.abs(corrections).max() > 0.1, corrections
 
     # The recording (session attached) solved offline through the same pipeline gives the
-    # live poses back until the box rejoins: from then on the recorder and mocapd each
-    # reconnect to it on their own ZeroMQ back-off (up to 250 ms), so the recording
-    # may lack cam3 frames mocapd solved with, and every later pose differs by its warm start.
+    # live poses back: bit for bit where both saw the same inputs at the same moments. But the
+    # recorder and mocapd are two processes with their own arrival times: on a loaded machine
+    # one may wait out a late frame the other had, and every later pose differs by its warm
+    # start; after the box rejoins each reconnects on its own ZeroMQ back-off (up to 250 ms).
+    # Measured, the largest joint-angle difference per frame, median over the first 3.5 s:
+    # 0 on a quiet machine, 3-8e-5 rad with one camera frame withheld offline, 5e-4 on a
+    # loaded 2-core CI run; a pipeline configured differently (the heading filter's time
+    # constant doubled, the floor 1.5 cm off) 7-8e-3 rad.
     poses, *_ = offline.solve_recording(tmp_path / "take.mcap")
     live_by_time = {p.capture_time_ns: np.array(p.theta) for p in run.poses}
     common = [p for p in poses if p.capture_time_ns in live_by_time]
@@ -68,7 +73,7 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     before = [p for p in common if p.capture_time_ns - run.start_ns < 3.5e9]
     assert len(before) >= 0.98 * 3.5 * 60
     diff = [np.abs(np.array(p.theta) - live_by_time[p.capture_time_ns]).max() for p in before]
-    assert np.median(diff) < 1e-6, np.percentile(diff, [50, 90, 100])
+    assert np.median(diff) < 2e-3, (np.mean(np.equal(diff, 0)), np.percentile(diff, [50, 90, 100]))
 
 
 def test_garbage_on_the_wire_is_counted_and_dropped(studio):

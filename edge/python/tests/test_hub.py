@@ -292,17 +292,22 @@ def test_the_hub_command_runs_until_told_to_stop(tmp_path):
     import signal
     import subprocess
     import sys
-    import time
+
+    import zmq
+
+    from mocap.net import transport
 
     (tmp_path / "hub.toml").write_text('[hub]\nrate_hz = 60\n\n[nodes]\n3 = "pelvis"\n')
     endpoint = f"tcp://127.0.0.1:{free_port()}"
     process = subprocess.Popen([sys.executable, "-m", "mocap_edge", "imu-hub", "--can", "virtual:cli", "--config",
                                 str(tmp_path / "hub.toml"), "--bind", endpoint], stderr=subprocess.PIPE, text=True)
-    try:
-        time.sleep(1.5)
+    sub = transport.subscriber(zmq.Context.instance(), [endpoint])
+    try:  # running once it publishes (its Health), however long its start takes on a loaded machine
+        assert sub.poll(30_000), "the hub published nothing in 30 s"
         process.send_signal(signal.SIGTERM)
         _, err = process.communicate(timeout=10)
     finally:
+        sub.close()
         process.kill()
     assert process.returncode == 0 and "batches sent" in err and "Traceback" not in err, err
     bad = subprocess.run([sys.executable, "-m", "mocap_edge", "imu-hub", "--can", "virtual:cli", "--config",
