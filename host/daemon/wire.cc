@@ -8,6 +8,7 @@
 #include "mocap/v1/imu_batch.pb.h"
 #include "mocap/v1/keypoint_frame.pb.h"
 #include "mocap/v1/pose_frame.pb.h"
+#include "protobuf_log.h"
 
 namespace mocap::wire {
 namespace {
@@ -122,6 +123,7 @@ std::string TypeName(const google::protobuf::Message& message) {
 }
 
 Decoded DecodeMessage(std::string_view type, std::string_view payload) {
+  LimitProtobufLog();
   Decoded out;
   if (payload.size() > kMaxPayload) {
     out.reason = DropReason::kOversized;

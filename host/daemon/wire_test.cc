@@ -13,6 +13,7 @@
 #include "mocap/v1/health.pb.h"
 #include "mocap/v1/imu_batch.pb.h"
 #include "mocap/v1/keypoint_frame.pb.h"
+#include "protobuf_log.h"
 
 namespace mocap::wire {
 namespace {
@@ -105,6 +106,25 @@ TEST(Wire, MessagesOverTheCapsAreInvalid) {
   for (int i = 0; i <= kMaxStreams; ++i) health.add_streams();
   EXPECT_EQ(DecodeMessage("mocap.v1.Health", health.SerializeAsString()).reason,
             DropReason::kInvalid);
+}
+
+// protobuf logs a line per string field that is not UTF-8; the message is dropped (and
+// counted) anyway, so a sender of such messages must not fill the host's log.
+TEST(Wire, StringsThatAreNotUtf8AreDroppedWithoutFloodingTheLog) {
+  v1::KeypointFrame frame;
+  frame.set_camera_id("camX");
+  std::string payload = frame.SerializeAsString();
+  payload[payload.find('X')] = '\xff';
+  const uint64_t held_before = ProtobufLogLinesHeldBack();
+  testing::internal::CaptureStderr();
+  for (int i = 0; i < 100; ++i)
+    EXPECT_EQ(DecodeMessage("mocap.v1.KeypointFrame", payload).reason, DropReason::kUndecodable);
+  const std::string log = testing::internal::GetCapturedStderr();
+  int lines = 0;
+  for (size_t at = log.find("UTF-8"); at != std::string::npos; at = log.find("UTF-8", at + 1))
+    ++lines;
+  EXPECT_LE(lines, 1) << log;
+  EXPECT_GE(ProtobufLogLinesHeldBack() - held_before, 99u);
 }
 
 }  // namespace
