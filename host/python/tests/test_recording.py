@@ -1,4 +1,5 @@
 import random
+import struct
 import socket
 import threading
 
@@ -211,3 +212,26 @@ def test_an_attached_session_may_name_only_its_attachments(tmp_path, name):
     assert str(e.value) == (f"{path}: the attached session names skeleton {name!r}, which is not one of its "
                             "attachments; give the session with --session")
     assert "root:" not in str(e.value)
+
+
+def test_the_chunk_index_points_at_every_chunk_of_the_file(tmp_path):
+    """The recorder keeps mcap's chunk index packed (recorder.PackedChunkIndexes): the index
+    written at the end must still name each chunk where it is, with its times, so that an
+    indexed reader finds every message."""
+    clock = [0.0]
+    messages = stream_messages() * 20
+    with recorder.Recorder(tmp_path / "take.mcap", chunk_s=0.05, clock=lambda: clock[0]) as r:
+        for k, message in enumerate(messages):
+            clock[0] = 0.02 * k  # a chunk every 4 messages
+            r.write(wire.encode(message), 10_000 + k)
+    data = (tmp_path / "take.mcap").read_bytes()
+    with open(tmp_path / "take.mcap", "rb") as f:
+        mcap_reader = make_reader(f)
+        summary = mcap_reader.get_summary()
+        times = [m.log_time for _, _, m in mcap_reader.iter_messages(log_time_order=True)]
+    assert summary.statistics.chunk_count == len(summary.chunk_indexes) >= len(messages) // 4
+    assert times == list(range(10_000, 10_000 + len(messages)))
+    for index in summary.chunk_indexes:
+        assert data[index.chunk_start_offset] == 0x06  # a Chunk record's opcode
+        start, end = struct.unpack_from("<QQ", data, index.chunk_start_offset + 9)
+        assert (start, end) == (index.message_start_time, index.message_end_time)

@@ -14,6 +14,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tracemalloc
 from pathlib import Path
 
 import zmq
@@ -152,10 +153,30 @@ def size_overhead(session: Path, messages: list[tuple[int, object]], folder: Pat
     return {str(k): round(100.0 * (v / sizes[math.inf] - 1.0), 2) for k, v in sizes.items() if k != math.inf}
 
 
+def memory_growth(messages: list[tuple[int, object]], folder: Path, minutes: float = 4.0) -> float:
+    """MB the recorder's Python heap grows per 10 minutes of the studio's messages (the take
+    repeated, its times moved on; the recorder's clock following them), after a 2-minute
+    warm-up, by tracemalloc: the chunk index it keeps until the file is closed."""
+    encoded = [(t, wire.encode(m)) for t, m in messages]
+    span_ns, clock, marks = messages[-1][0] + 1, [0.0], []
+    tracemalloc.start()
+    try:
+        with recorder.Recorder(folder / "long.mcap", clock=lambda: clock[0]) as r:
+            for loop in range(math.ceil(minutes * 60e9 / span_ns)):
+                for offset_ns, frames in encoded:
+                    clock[0] = (loop * span_ns + offset_ns) * 1e-9
+                    r.write(frames, loop * span_ns + offset_ns)
+                marks.append((clock[0], tracemalloc.get_traced_memory()[0]))
+    finally:
+        tracemalloc.stop()
+    after = [(t, b) for t, b in marks if t >= 120.0]
+    return (after[-1][1] - after[0][1]) / 1e6 / (after[-1][0] - after[0][0]) * 600.0
+
+
 def bench(kills: int = 5, seconds: float = 6.0) -> dict:
     """The `recording` benchmark line: the studio's data rate, what the chunk period costs in
-    file size, and what SIGKILL loses (`kills` drills, killed 2.0-4.5 s into the take) and
-    SIGTERM leaves."""
+    file size, what SIGKILL loses (`kills` drills, killed 2.0-4.5 s into the take) and
+    SIGTERM leaves, and how the recorder's heap grows over a long take."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         session, messages = studio_streams(folder / "studio", seconds)
@@ -172,4 +193,5 @@ def bench(kills: int = 5, seconds: float = 6.0) -> dict:
                 "sigkill_lost_s_max": round(max(x["lost_s"] for x in losses), 3),
                 "sigkill_lost_s_median": round(statistics.median(x["lost_s"] for x in losses), 3),
                 "sigkill_messages_lost": [x["messages_lost"] for x in losses], "recovered_indexed_messages": counts,
-                "sigterm_intact": lost(term)["intact"], "sigterm_messages_lost": lost(term)["messages_lost"]}
+                "sigterm_intact": lost(term)["intact"], "sigterm_messages_lost": lost(term)["messages_lost"],
+                "recorder_heap_growth_mb_per_10min": round(memory_growth(messages, folder), 3)}

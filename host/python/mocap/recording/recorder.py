@@ -40,6 +40,8 @@ from pathlib import Path
 import zmq
 from google.protobuf import descriptor_pb2
 from google.protobuf.message import Message
+from mcap.data_stream import RecordBuilder
+from mcap.records import ChunkIndex
 from mcap.writer import Writer
 
 from mocap.errors import InputError
@@ -52,6 +54,29 @@ log = logging.getLogger(__name__)
 POLL_MS = 100  # how often `record` checks its stop conditions (and closes a chunk that is due)
 CHUNK_S = 0.25  # a chunk is closed at most this long after its first message: what a kill can lose
 CHUNK_BYTES = 1 << 20  # ... or when it reaches this size (mcap's default)
+
+
+class PackedChunkIndexes:
+    """The writer's chunk index kept as the bytes it will write at the file's end (~180 bytes
+    a chunk) instead of a Python record each (~1.5 kB): with a chunk every CHUNK_S, an hour's
+    take holds ~2.6 MB of index, not ~14 (docs/reliability.md, "Soak"). mcap's Writer only
+    appends to its index and, when it finishes, writes every entry (mcap==1.2.2, pinned)."""
+
+    def __init__(self) -> None:
+        self._records = bytearray()
+        self.count = 0
+
+    def append(self, index: ChunkIndex) -> None:
+        builder = RecordBuilder()
+        index.write(builder)
+        self._records += builder.end()
+        self.count += 1
+
+    def __iter__(self):
+        yield self  # one entry that writes them all
+
+    def write(self, builder: RecordBuilder) -> None:
+        builder.write(bytes(self._records))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,6 +129,7 @@ class Recorder:
         self._on_record = on_record
         self._file = open(path, "wb")
         self._writer = Writer(self._file, chunk_size=CHUNK_BYTES)
+        self._writer._Writer__chunk_indices = PackedChunkIndexes()
         self._writer.start(profile="protobuf", library="mocap recording")
         self._chunk_s, self._clock, self._chunk_opened = chunk_s, clock, None
         self._schema_ids: dict[str, int] = {}
