@@ -50,13 +50,14 @@ bool OpenPublisher(const Session& session, zmq::socket_t& pub, std::string* erro
   return true;
 }
 
-// Feeds a message as received, stamped with its arrival.
-void Deliver(std::vector<zmq::message_t>& parts, HostPipeline* pipeline) {
+// Feeds a message as received on input `link`, stamped with its arrival.
+void Deliver(size_t link, std::vector<zmq::message_t>& parts, HostPipeline* pipeline) {
   std::string why;
   const int64_t now = NowNs();
   const bool ok =
       parts.size() == 2
-          ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why)
+          ? pipeline->Feed(parts[0].to_string_view(), parts[1].to_string_view(), now, &why,
+                           static_cast<int>(link))
           : pipeline->Reject("undecodable", std::to_string(parts.size()) + " frames, expected 2",
                              &why);
   if (!ok) LogDrop(why, pipeline->dropped());
@@ -131,10 +132,12 @@ bool RunDaemon(HostPipeline* pipeline, const DaemonOptions& options, const std::
   while (!stop->load()) {
     inputs.Poll(std::chrono::milliseconds(kPollMs));
     if (zap) zap->Handle();
-    inputs.Drain([&](std::vector<zmq::message_t>& parts) { Deliver(parts, pipeline); });
+    inputs.Drain(
+        [&](size_t link, std::vector<zmq::message_t>& parts) { Deliver(link, parts, pipeline); });
     PublishPoses(pub, pipeline, summary);
     const int64_t now = NowNs();
     inputs.Watch(now);
+    for (size_t link : inputs.TakeClosed()) pipeline->LinkDown(static_cast<int>(link));
     LogRefusals(inputs, &logged);
     if (now >= next_health) {
       PublishHealth(pub, pipeline, inputs, now, options.log_health);

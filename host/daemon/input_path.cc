@@ -38,33 +38,46 @@ InputPath::InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const Key
       decoder_(rig, imus, layout),
       selector_(static_cast<int>(rig.cameras.size()), min_confidence),
       sync_(static_cast<int>(rig.cameras.size()), static_cast<int>(imus.size()), sync),
-      monitor_(Names(rig.cameras), Names(imus)) {}
+      monitor_(Names(rig.cameras), Names(imus)),
+      camera_link_(rig.cameras.size(), kNoLink),
+      imu_link_(imus.size(), kNoLink) {}
+
+void InputPath::LinkDown(int link) {
+  if (link == kNoLink) return;
+  std::vector<int> cameras, imus;
+  for (size_t c = 0; c < camera_link_.size(); ++c)
+    if (camera_link_[c] == link) cameras.push_back(static_cast<int>(c));
+  for (size_t i = 0; i < imu_link_.size(); ++i)
+    if (imu_link_[i] == link) imus.push_back(static_cast<int>(i));
+  sync_.MarkLinkDown(cameras, imus);
+}
 
 bool InputPath::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
-                     const Solver* tracker, std::string* why) {
+                     const Solver* tracker, std::string* why, int link) {
   const wire::Decoded d = wire::DecodeMessage(type, payload);
   if (!d.message) return monitor_.Drop(wire::ToString(d.reason), d.detail, why);
-  return Feed(*d.message, now_ns, tracker, why);
+  return Feed(*d.message, now_ns, tracker, why, link);
 }
 
 bool InputPath::Feed(const google::protobuf::Message& message, int64_t now_ns,
-                     const Solver* tracker, std::string* why) {
+                     const Solver* tracker, std::string* why, int link) {
   if (auto* frame = dynamic_cast<const v1::KeypointFrame*>(&message))
-    return FeedKeypoints(*frame, now_ns, tracker, why);
+    return FeedKeypoints(*frame, now_ns, tracker, why, link);
   if (auto* batch = dynamic_cast<const v1::ImuBatch*>(&message))
-    return FeedImus(*batch, now_ns, why);
+    return FeedImus(*batch, now_ns, why, link);
   return monitor_.Drop("not_an_input", wire::TypeName(message) + " is not an input of the host",
                        why);
 }
 
 bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, const Solver* tracker,
-                              std::string* why) {
+                              std::string* why, int link) {
   int c = -1;
   Rejection rejection;
   if (!decoder_.CameraOf(frame, &c, &rejection)) {
     if (c >= 0) monitor_.camera(c).invalid++;
     return monitor_.Drop(rejection.reason, rejection.detail, why);
   }
+  camera_link_[c] = link;
   StreamStats& stats = monitor_.camera(c);
   stats.Count(frame.frame_index(), 0, frame.capture_time_ns(), now_ns);
   if (OffClock(frame.capture_time_ns(), now_ns)) {
@@ -94,7 +107,7 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
   return true;
 }
 
-bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why) {
+bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why, int link) {
   monitor_.hub(batch.hub_id()).Count(batch.sequence(), 0, batch.send_time_ns(), now_ns);
   int unknown = 0, off_clock = 0;
   int64_t off_time_ns = 0;
@@ -104,6 +117,7 @@ bool InputPath::FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string*
       unknown++;
       continue;
     }
+    imu_link_[i] = link;
     monitor_.imu(i).Count(s.packet_counter(), 1u << 16, s.sample_time_ns(), now_ns);
     if (OffClock(s.sample_time_ns(), now_ns)) {
       off_clock++;

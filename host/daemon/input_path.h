@@ -24,6 +24,8 @@ namespace mocap {
 
 class InputPath {
  public:
+  static constexpr int kNoLink = -1;
+
   // min_confidence: keypoints at or below are not detected (SolverOptions::min_confidence).
   InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const KeypointLayout& layout,
             const SyncOptions& sync, double min_confidence);
@@ -32,17 +34,23 @@ class InputPath {
   // a solver whose pose, once initialised, picks the subject among several persons. False
   // when the message was dropped: *why (may be null) is "reason: detail" for a log line.
 
+  // `link`: the connection it came on (mocapd's input socket), or kNoLink (a recording).
+
   // A message as received (type frame and payload), checked by wire::DecodeMessage.
   bool Feed(std::string_view type, std::string_view payload, int64_t now_ns, const Solver* tracker,
-            std::string* why);
+            std::string* why, int link = kNoLink);
   // A decoded message: a KeypointFrame or an ImuBatch, anything else is "not_an_input".
   bool Feed(const google::protobuf::Message& message, int64_t now_ns, const Solver* tracker,
-            std::string* why);
+            std::string* why, int link = kNoLink);
   bool FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, const Solver* tracker,
-                     std::string* why);
+                     std::string* why, int link = kNoLink);
   // A batch's samples are taken one by one: a late or duplicated one is counted
   // ("late_or_duplicate") and the rest kept; false only when sensors are not in the set.
-  bool FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why);
+  bool FeedImus(const v1::ImuBatch& batch, int64_t now_ns, std::string* why, int link = kNoLink);
+
+  // The connection `link` closed: the streams last heard on it are inactive at once, so no
+  // frame waits for a box that is gone (StreamSynchroniser::MarkLinkDown).
+  void LinkDown(int link);
 
   // Frames ready at now_ns, oldest first.
   std::vector<SyncedFrame> TakeReady(int64_t now_ns) { return sync_.TakeReady(now_ns); }
@@ -62,6 +70,7 @@ class InputPath {
   SubjectSelector selector_;
   StreamSynchroniser sync_;
   StreamMonitor monitor_;
+  std::vector<int> camera_link_, imu_link_;  // the link each stream was last heard on
 };
 
 }  // namespace mocap

@@ -307,5 +307,37 @@ TEST(InputPath, ACameraWhoseClockStepsIsLeftOutWithoutHoldingTheOthers) {
   EXPECT_EQ(h.streams(0).clock_steps(), 0u);
 }
 
+// mocapd tells the path which connection each message came on: when one closes, the streams
+// last heard on it (a box's camera, a hub's IMUs) are not waited for any more.
+TEST(InputPath, TheStreamsOfALinkThatClosedAreNotWaitedFor) {
+  const Studio studio;
+  InputPath path = studio.Path();
+  enum Link { kHub, kBox0, kBox1 };
+  int64_t now = kT0;
+  for (int k = 0; k < 3; ++k) {
+    now = kT0 + k * kFrame + 5 * kMs;
+    path.Feed(studio.Imus(k), now, nullptr, nullptr, kHub);
+    path.Feed(studio.Keypoints(k, 0), now, nullptr, nullptr, kBox0);
+    path.Feed(studio.Keypoints(k, 1), now, nullptr, nullptr, kBox1);
+    ASSERT_EQ(path.TakeReady(now).size(), 1u);
+  }
+  now = kT0 + 3 * kFrame + 5 * kMs;
+  path.Feed(studio.Imus(3), now, nullptr, nullptr, kHub);
+  path.Feed(studio.Keypoints(3, 0), now, nullptr, nullptr, kBox0);
+  EXPECT_TRUE(path.TakeReady(now).empty());  // box 1 is waited for
+  path.LinkDown(InputPath::kNoLink);         // a recording's messages have no link: nothing
+  path.LinkDown(kBox1);
+  EXPECT_TRUE(path.sync().CameraActive(0, now));
+  EXPECT_FALSE(path.sync().CameraActive(1, now));
+  for (size_t i = 0; i < studio.scene.imus.size(); ++i)
+    EXPECT_TRUE(path.sync().ImuActive(static_cast<int>(i), now));
+  const std::vector<SyncedFrame> ready = path.TakeReady(now);
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_EQ(ready[0].cameras_clocked, std::vector<int>{0});
+  path.LinkDown(kHub);
+  for (size_t i = 0; i < studio.scene.imus.size(); ++i)
+    EXPECT_FALSE(path.sync().ImuActive(static_cast<int>(i), now));
+}
+
 }  // namespace
 }  // namespace mocap

@@ -60,13 +60,14 @@ void InputSockets::Poll(std::chrono::milliseconds timeout) {
   }
 }
 
-void InputSockets::Drain(const std::function<void(std::vector<zmq::message_t>&)>& deliver) {
+void InputSockets::Drain(const std::function<void(size_t, std::vector<zmq::message_t>&)>& deliver) {
   std::vector<zmq::message_t> parts;
-  for (zmq::socket_t& sub : subs_) {
+  for (size_t i = 0; i < subs_.size(); ++i) {
     for (;;) {
       parts.clear();
-      if (!zmq::recv_multipart(sub, std::back_inserter(parts), zmq::recv_flags::dontwait)) break;
-      deliver(parts);
+      if (!zmq::recv_multipart(subs_[i], std::back_inserter(parts), zmq::recv_flags::dontwait))
+        break;
+      deliver(i, parts);
     }
   }
 }
@@ -103,6 +104,7 @@ void InputSockets::OnEvent(size_t i, uint16_t event, int64_t now_ns) {
       break;
     case ZMQ_EVENT_DISCONNECTED:
       link.connected = false;
+      closed_.push_back(i);
       break;
     case ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL:
     case ZMQ_EVENT_HANDSHAKE_FAILED_AUTH:

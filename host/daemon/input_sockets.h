@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 #include <zmq.hpp>
 
@@ -40,10 +41,12 @@ class InputSockets {
   bool Open(const Session& session, std::string* error);
   // Waits up to timeout for a message or an event on any input.
   void Poll(std::chrono::milliseconds timeout);
-  // Hands every message waiting on any input to deliver, as its frames.
-  void Drain(const std::function<void(std::vector<zmq::message_t>&)>& deliver);
+  // Hands every message waiting on any input to deliver, with the input's index (its link).
+  void Drain(const std::function<void(size_t, std::vector<zmq::message_t>&)>& deliver);
   // Reads the monitors' events (counting refused handshakes) and connects anew the inputs due.
   void Watch(int64_t now_ns);
+  // The inputs whose connection closed since the last call (by index, as Drain gives them).
+  std::vector<size_t> TakeClosed() { return std::exchange(closed_, {}); }
   // One "link/<endpoint>" stream per input: active while connected, its refused handshakes.
   void AppendTo(v1::Health* health) const;
   const std::vector<InputLink>& links() const { return links_; }
@@ -55,6 +58,7 @@ class InputSockets {
   std::vector<zmq::socket_t> subs_, monitors_;
   std::vector<InputLink> links_;
   std::vector<zmq::pollitem_t> items_;
+  std::vector<size_t> closed_;
 };
 
 }  // namespace mocap

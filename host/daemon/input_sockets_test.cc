@@ -47,7 +47,7 @@ class SecureInputs : public ::testing::Test {
       pub.send(zmq::str_buffer("mocap.v1.Health"), zmq::send_flags::sndmore);
       pub.send(zmq::str_buffer(""), zmq::send_flags::none);
       inputs_.Poll(std::chrono::milliseconds(5));
-      inputs_.Drain([&](std::vector<zmq::message_t>&) { received++; });
+      inputs_.Drain([&](size_t, std::vector<zmq::message_t>&) { received++; });
       // Past the retry delay at once: the test need not wait a second per retry.
       inputs_.Watch(++tick_ * InputSockets::kRetryNs);
     }
@@ -121,11 +121,49 @@ TEST(Inputs, WithoutKeysAPlainPublisherIsHeard) {
   for (int i = 0; i < 1000 && received < 10; ++i) {
     pub.send(zmq::str_buffer("x"), zmq::send_flags::none);
     inputs.Poll(std::chrono::milliseconds(5));
-    inputs.Drain([&](std::vector<zmq::message_t>&) { received++; });
+    inputs.Drain([&](size_t, std::vector<zmq::message_t>&) { received++; });
     inputs.Watch(0);
   }
   EXPECT_GE(received, 10);
   EXPECT_EQ(inputs.links().at(0).handshake_failures, 0u);
+  EXPECT_TRUE(inputs.links().at(0).connected);
+}
+
+// A box that goes away (its process ended, its socket closed) is reported at once, by the
+// index its messages came with, so the host stops waiting for its frames.
+TEST(Inputs, AClosedPublisherIsReportedByItsInputsIndex) {
+  zmq::context_t context;
+  zmq::socket_t first = Publisher(context, "tcp://127.0.0.1:*", "");
+  zmq::socket_t second = Publisher(context, "tcp://127.0.0.1:*", "");
+  Session session;
+  session.inputs = {first.get(zmq::sockopt::last_endpoint),
+                    second.get(zmq::sockopt::last_endpoint)};
+  InputSockets inputs(context);
+  std::string error;
+  ASSERT_TRUE(inputs.Open(session, &error)) << error;
+  std::vector<int> received(2, 0);
+  for (int i = 0; i < 1000 && (received[0] < 3 || received[1] < 3); ++i) {
+    first.send(zmq::str_buffer("a"), zmq::send_flags::none);
+    second.send(zmq::str_buffer("b"), zmq::send_flags::none);
+    inputs.Poll(std::chrono::milliseconds(5));
+    inputs.Drain([&](size_t input, std::vector<zmq::message_t>& parts) {
+      EXPECT_EQ(parts.at(0).to_string(), input == 0 ? "a" : "b");
+      received.at(input)++;
+    });
+    inputs.Watch(0);
+  }
+  ASSERT_GE(received[1], 3);
+  EXPECT_TRUE(inputs.TakeClosed().empty());
+  second.close();
+  std::vector<size_t> closed;
+  for (int i = 0; i < 1000 && closed.empty(); ++i) {
+    inputs.Poll(std::chrono::milliseconds(5));
+    inputs.Drain([](size_t, std::vector<zmq::message_t>&) {});  // what was in flight
+    inputs.Watch(0);
+    closed = inputs.TakeClosed();
+  }
+  EXPECT_EQ(closed, std::vector<size_t>{1});
+  EXPECT_FALSE(inputs.links().at(1).connected);
   EXPECT_TRUE(inputs.links().at(0).connected);
 }
 

@@ -19,7 +19,7 @@ HostPipeline::HostPipeline(Session session, std::unique_ptr<Solver> solver)
              session_.solver.min_confidence) {}
 
 bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
-                        std::string* why) {
+                        std::string* why, int link) {
   wire::Decoded d = wire::DecodeMessage(type, payload);
   if (!d.message) return input_.monitor().Drop(wire::ToString(d.reason), d.detail, why);
   if (auto* calibration = dynamic_cast<const v1::Calibration*>(d.message.get()))
@@ -28,7 +28,7 @@ bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t
     if (edge_health_.Add(*report, now_ns)) return true;
     return input_.monitor().Drop("invalid", "a Health report without its source", why);
   }
-  return input_.Feed(*d.message, now_ns, &step_.solver(), why);
+  return input_.Feed(*d.message, now_ns, &step_.solver(), why, link);
 }
 
 bool HostPipeline::FeedCalibration(const v1::Calibration& c, int64_t now_ns, std::string* why) {

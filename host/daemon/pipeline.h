@@ -37,10 +37,13 @@ class HostPipeline {
  public:
   static std::unique_ptr<HostPipeline> Create(Session session, std::string* error);
 
-  // One message as received; now_ns is its arrival on the shared timebase. False when it
-  // was dropped: *why (may be null) says why, for a log line.
+  // One message as received; now_ns is its arrival on the shared timebase; link: the input
+  // connection it came on (InputPath). False when it was dropped: *why (may be null) says
+  // why, for a log line.
   bool Feed(std::string_view type, std::string_view payload, int64_t now_ns,
-            std::string* why = nullptr);
+            std::string* why = nullptr, int link = InputPath::kNoLink);
+  // The input connection `link` closed (InputPath::LinkDown).
+  void LinkDown(int link) { input_.LinkDown(link); }
   // Counts a message the transport could not even split into (type, payload).
   bool Reject(const std::string& reason, const std::string& detail, std::string* why) {
     return input_.monitor().Drop(reason, detail, why);

@@ -18,7 +18,14 @@ bool SyncOptions::IsValid(std::string* error) const {
 StreamSynchroniser::StreamSynchroniser(int num_cameras, int num_imus, SyncOptions options)
     : options_(options), cameras_(num_cameras), imus_(num_imus) {}
 
+void StreamSynchroniser::MarkLinkDown(const std::vector<int>& cameras,
+                                      const std::vector<int>& imus) {
+  for (int c : cameras) cameras_.at(c).counts.link_down = true;
+  for (int i : imus) imus_.at(i).counts.link_down = true;
+}
+
 bool StreamSynchroniser::Active(const StreamCounts& counts, int64_t now_ns) const {
+  if (counts.link_down) return false;
   // A configured stream is expected from the first input of any stream on.
   const std::optional<int64_t>& last =
       counts.last_arrival_ns ? counts.last_arrival_ns : first_arrival_ns_;
@@ -30,6 +37,7 @@ bool StreamSynchroniser::AddCamera(CameraInput input, int64_t now_ns) {
   if (!first_arrival_ns_) first_arrival_ns_ = now_ns;
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
+  stream.counts.link_down = false;
   const int64_t t = input.time_ns;
   if (last_released_ns_ && t <= *last_released_ns_ + options_.group_tolerance_ns) {
     stream.counts.late++;
@@ -60,6 +68,7 @@ bool StreamSynchroniser::AddImu(const ImuInput& input, int64_t now_ns) {
   if (!first_arrival_ns_) first_arrival_ns_ = now_ns;
   stream.counts.received++;
   stream.counts.last_arrival_ns = now_ns;
+  stream.counts.link_down = false;
   auto& samples = stream.samples;
   const int64_t t = input.time_ns;
   auto at = std::lower_bound(samples.begin(), samples.end(), t,

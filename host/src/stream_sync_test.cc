@@ -115,6 +115,41 @@ TEST(StreamSync, AStoppedCameraIsNotWaitedForAndCountsAgainWhenItReturns) {
   EXPECT_TRUE(sync.CameraActive(1, t + kMs));
 }
 
+TEST(StreamSync, AStreamWhoseLinkWentDownIsNotWaitedForFromThatMoment) {
+  StreamSynchroniser sync(2, 1, SyncOptions{});
+  int64_t t = kT0;
+  for (int k = 0; k < 3; ++k, t += kFrame) {
+    sync.AddCamera(Cam(0, t), t + kMs);
+    sync.AddCamera(Cam(1, t), t + kMs);
+    sync.AddImu(Imu(0, t), t + kMs);
+    ASSERT_EQ(sync.TakeReady(t + kMs).size(), 1u);
+  }
+  sync.AddCamera(Cam(0, t), t + kMs);
+  sync.AddImu(Imu(0, t), t + kMs);
+  EXPECT_TRUE(sync.TakeReady(t + 2 * kMs).empty());  // camera 1 is waited for
+  sync.MarkLinkDown({1}, {});                        // its box's connection closed
+  EXPECT_FALSE(sync.CameraActive(1, t + 2 * kMs));
+  auto ready = sync.TakeReady(t + 2 * kMs);  // at once: no max_wait, no stale_after
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_EQ(ready[0].observations.cameras.size(), 1u);
+  // The IMU's link down too: the next frame waits for neither.
+  t += kFrame;
+  sync.MarkLinkDown({}, {0});
+  sync.AddCamera(Cam(0, t), t + kMs);
+  ready = sync.TakeReady(t + kMs);
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_TRUE(ready[0].observations.imus.empty());
+  // Back: each counts from its next input.
+  t += kFrame;
+  sync.AddCamera(Cam(1, t), t + kMs);
+  sync.AddImu(Imu(0, t), t + kMs);
+  EXPECT_TRUE(sync.CameraActive(1, t + kMs) && sync.ImuActive(0, t + kMs));
+  sync.AddCamera(Cam(0, t), t + kMs);
+  ready = sync.TakeReady(t + kMs);
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_EQ(ready[0].observations.cameras.size(), 2u);
+}
+
 TEST(StreamSync, OutOfOrderFramesAreReleasedInOrderAndDuplicatesDropped) {
   StreamSynchroniser sync(1, 0, SyncOptions{});
   sync.AddCamera(Cam(0, kT0 + kFrame), kT0 + kFrame);

@@ -7,9 +7,10 @@
 // are slerped, accelerations interpolated linearly, to the frame's time. A stream is
 // active while it delivered within stale_after (every configured stream is expected from
 // the first input of any): a stopped box never stalls the solve, and counts again from its
-// first new message. Late (after their frame was handed over)
-// and duplicated inputs are counted and dropped; out-of-order ones are put in order.
-// With no camera active, frames are clocked from the IMUs at imu_only_rate_hz.
+// first new message. A stream whose connection closed (MarkLinkDown) is inactive at once. Late
+// (after their frame was handed over) and duplicated inputs are counted and dropped; out-of-order
+// ones are put in order. With no camera active, frames are clocked from the IMUs at
+// imu_only_rate_hz.
 //
 // Times are int64 nanoseconds on the shared timebase; `now_ns` is the arrival time
 // (live: the host's clock; replay: the recorded arrival), so a replay is deterministic.
@@ -82,6 +83,7 @@ struct SyncedFrame {
 struct StreamCounts {
   uint64_t received = 0, late = 0, duplicates = 0, out_of_order = 0;
   std::optional<int64_t> last_arrival_ns;
+  bool link_down = false;  // the connection that carried it closed; until its next input
 };
 
 class StreamSynchroniser {
@@ -92,6 +94,9 @@ class StreamSynchroniser {
   // the input was dropped (late or duplicate; counted in the stream's counts).
   bool AddCamera(CameraInput input, int64_t now_ns);
   bool AddImu(const ImuInput& input, int64_t now_ns);
+  // The connection that carried these streams closed: no frame waits for them any more
+  // (they would only be stale after stale_after); each is active again from its next input.
+  void MarkLinkDown(const std::vector<int>& cameras, const std::vector<int>& imus);
   // Frames ready at now_ns, oldest first.
   std::vector<SyncedFrame> TakeReady(int64_t now_ns);
   // The end of the input (an offline solve): the frames ready max_wait after the newest
