@@ -79,15 +79,19 @@ def _kill_and_restart(live: LiveStudio, name: str, stream: str, rejoined) -> dic
 
 def _continuity(live: LiveStudio, around_ns: int) -> dict:
     """The poses around a kill (from 0.5 s before to 1.5 s after): frame periods the solve
-    skipped, and how much later than before the kill the poses were published (s)."""
+    skipped, how much later than before the kill the poses were published at most (s), and
+    by how much in the median over the 300 ms after it (the frames a box's silence alone
+    would hold for max_wait until it is stale)."""
     poses = sorted((a.message.capture_time_ns, a.time_ns) for a in live.poses()
                    if -0.5e9 <= a.message.capture_time_ns - around_ns <= 1.5e9)
     t = np.array(poses, np.int64)
     before = t[t[:, 0] < around_ns]
     delay = (t[:, 1] - t[:, 0]) * 1e-9
+    after = t[(t[:, 0] >= around_ns) & (t[:, 0] < around_ns + 300_000_000)]  # till a silent box is stale
     skipped = int(np.maximum(np.round(np.diff(t[:, 0]) * 1e-9 / PERIOD_S) - 1, 0).sum())
-    return {"frames_skipped": skipped,
-            "extra_delay_s": float(delay.max() - np.median((before[:, 1] - before[:, 0]) * 1e-9))}
+    usual = np.median((before[:, 1] - before[:, 0]) * 1e-9)
+    return {"frames_skipped": skipped, "extra_delay_s": float(delay.max() - usual),
+            "waited_after_kill_s": float(np.median((after[:, 1] - after[:, 0]) * 1e-9) - usual)}
 
 
 def edge(s: Studio, folder: Path) -> dict:
