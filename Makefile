@@ -38,7 +38,7 @@ clean:
 	rm -rf build $(FUZZ_BUILD)
 
 lint:             ## formatting of the C++ code, static checks of the Python code, its rooms and sizes, options declared everywhere
-	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h')
+	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h' 'edge/*.cc' 'edge/*.h')
 	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests firmware conftest.py
 	$(CURDIR)/.venv/bin/lint-imports pyproject.toml
 	$(PY) scripts/check_sizes.py host edge firmware tests

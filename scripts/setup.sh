@@ -11,6 +11,7 @@ DEBIAN_PACKAGES=(
   python3 python3-dev python3-venv
   gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm libcmocka-dev
   clang libclang-rt-14-dev
+  libcamera-dev
 )
 
 missing=()

@@ -173,16 +173,35 @@ def test_a_file_that_is_not_a_video(tmp_path: Path) -> None:
         open_source(f"video:{path}")
 
 
-def test_libcamera_fails_clearly_without_picamera2() -> None:
+def test_libcamera_without_picamera2_opens_through_the_projects_adapter() -> None:
+    """Off a Raspberry Pi, `libcamera:` goes through the adapter over libcamera's C++ API
+    (edge/libcamera/); a camera that is not there is a SourceError naming it and what was
+    found (capturing from a real kernel camera: the VM tests' vimc)."""
     try:
         import picamera2  # noqa: F401
     except ImportError:
         pass
     else:
         pytest.skip("picamera2 is installed: this is a Raspberry Pi")
+    from mocap_edge.sources import _libcamera
+
+    found = _libcamera.list_cameras()
+    with pytest.raises(SourceError, match=rf"^libcamera: no camera {len(found)} \(found {len(found)}: ") as raised:
+        open_source(f"libcamera:{len(found)}")
+    assert raised.value.__suppress_context__  # the adapter's error, without its traceback
+    with pytest.raises(SourceError, match="no camera no-such-id"):
+        open_source("libcamera:no-such-id")
+    with pytest.raises(SourceError, match="out of range"):
+        open_source("libcamera:0", fps=0.0)
+    assert _libcamera.version().count(".") == 2
+
+
+def test_libcamera_without_either_backend_says_what_is_missing(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "picamera2", None)  # import fails
+    monkeypatch.setitem(sys.modules, "mocap_edge.sources._libcamera", None)
     with pytest.raises(SourceError) as raised:
         open_source("libcamera:0")
-    assert "'picamera2'" in str(raised.value) and "apt install python3-picamera2" in str(raised.value)
+    assert "apt install python3-picamera2" in str(raised.value) and "libcamera-dev" in str(raised.value)
     assert raised.value.__suppress_context__  # the ImportError's traceback is not chained
 
 

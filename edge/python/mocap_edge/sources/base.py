@@ -24,7 +24,7 @@ BACKENDS: dict[str, str] = {
     "video": "mocap_edge.sources.files:VideoFileSource",
     "images": "mocap_edge.sources.files:ImageFolderSource",
     "v4l2": "mocap_edge.sources.v4l2:V4l2Source",
-    "libcamera": "mocap_edge.sources.pi_camera:LibcameraSource",
+    "libcamera": "mocap_edge.sources.libcamera_capture:open_libcamera",
     "fake": "mocap_edge.sources.fake:FakeSource",
     "sim": "mocap_edge.sources.sim:SimulatedSource",
 }
