@@ -25,7 +25,7 @@ from mocap.net.keys import ServerKeys
 
 from mocap_edge import camera_box, pacing
 from mocap_edge.detect.base import Detector, open_detector
-from mocap_edge.errors import EdgeError, TriggerError
+from mocap_edge.errors import EdgeError, SourceError, TriggerError
 from mocap_edge.hub import command as hub_command
 from mocap_edge.sources.base import open_source
 from mocap_edge.trigger import GpiodTrigger, TriggerPairing
@@ -40,7 +40,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("role", choices=["camera", "imu-hub", "sim-nodes"])
     p.add_argument("--source", help="role camera: the frame source, e.g. libcamera:0, v4l2:/dev/video0, "
                    "video:cam01.mp4, images:DIR (with --fps), fake:, sim:STREAMS (a camera of the simulated studio)")
-    p.add_argument("--fps", type=float, default=None, help="frame rate of an images: source")
+    p.add_argument("--fps", type=float, default=None, help="frame rate of an images: source, or what a camera "
+                   "(libcamera:, v4l2:) is asked for")
+    p.add_argument("--size", metavar="WxH", help="a camera's (libcamera:, v4l2:) frame size, e.g. 1280x720")
     p.add_argument("--hs", nargs=2, type=int, default=(1, 1), metavar=("PERIOD", "BURST"),
                    help="detect on BURST consecutive frames of every PERIOD (high-speed mode)")
     p.add_argument("--realtime", action="store_true", help="play a file source at its capture times")
@@ -158,11 +160,22 @@ def _source_options(a: argparse.Namespace, span: Span | None) -> dict[str, objec
     options: dict[str, object] = {"start_ns": a.start_ns} if scheme in ("video", "images", "fake", "sim") else {}
     if a.fps:
         options["fps"] = a.fps
+    if a.size:
+        options.update(_size(a.size, scheme))
     if scheme == "sim":
         options.update(camera=a.camera, live=a.from_open, clock_steps=tuple(map(tuple, a.clock_step)))
         if span:
             options["span"] = span
     return options
+
+
+def _size(spec: str, scheme: str) -> dict[str, int]:
+    width, x, height = spec.partition("x")
+    if scheme not in ("libcamera", "v4l2"):
+        raise SourceError(f"--size is for a camera (libcamera:, v4l2:), not a {scheme}: source")
+    if not (x and width.isdigit() and height.isdigit()):
+        raise SourceError(f"--size {spec}: expected WIDTHxHEIGHT, e.g. 1280x720")
+    return {"width": int(width), "height": int(height)}
 
 
 def _model(a: argparse.Namespace) -> Detector:

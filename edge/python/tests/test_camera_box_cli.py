@@ -23,7 +23,9 @@ def test_hardware_that_is_absent_is_named_not_traced():
     for args in (["--trigger", "/dev/gpiochip9:3"], ["--trigger", "/dev/gpiochip0:x"]):
         out = run("--source", "fake:", "--bind", "tcp://127.0.0.1:0", *args)
         assert out.returncode == 1 and "Traceback" not in out.stderr and out.stderr.startswith("mocap_edge:")
-    for args in (["--source", "v4l2:/dev/video9"], ["--source", "fake:", "--model", "nosuch"]):
+    for args in (["--source", "v4l2:/dev/video9"], ["--source", "fake:", "--model", "nosuch"],
+                 ["--source", "libcamera:9"], ["--source", "libcamera:0", "--size", "640by480"],
+                 ["--source", "fake:", "--size", "640x480"]):
         out = run(*args, "--bind", "tcp://127.0.0.1:0")
         assert out.returncode == 1 and "Traceback" not in out.stderr and out.stderr.startswith("mocap_edge:")
 

@@ -11,6 +11,7 @@ the camera dropped leave gaps (and are counted in `dropped`).
 from __future__ import annotations
 
 import importlib
+import os
 import time
 
 from mocap_edge.clocks import realtime_offset_ns
@@ -36,6 +37,9 @@ def open_libcamera(camera: str, width: int = 1280, height: int = 720, fps: float
 
 
 def _adapter():
+    # libcamera logs at INFO from the moment it is loaded (its version, every camera opened):
+    # a box's log keeps libcamera's warnings, unless LIBCAMERA_LOG_LEVELS asks for more.
+    os.environ.setdefault("LIBCAMERA_LOG_LEVELS", "*:WARN")
     try:
         return importlib.import_module("mocap_edge.sources._libcamera")
     except ImportError as e:
