@@ -22,6 +22,13 @@ void SetUp(zmq::socket_t& sub, const Session& session, const std::string& endpoi
   sub.set(zmq::sockopt::reconnect_ivl_max, 250);
   sub.set(zmq::sockopt::linger, 0);
   sub.set(zmq::sockopt::subscribe, "");
+  // A box that hangs, or whose cable is pulled, leaves its TCP connection open: without a
+  // heartbeat the host would hold that dead connection for good (a SUB sends nothing after
+  // its subscription, so TCP never finds out) and never connect to the box when it is back.
+  // A ping every second, unanswered for 3 s, closes it (a disconnection, InputLink) and
+  // connecting anew begins.
+  sub.set(zmq::sockopt::heartbeat_ivl, InputSockets::kHeartbeatMs);
+  sub.set(zmq::sockopt::heartbeat_timeout, InputSockets::kHeartbeatTimeoutMs);
   if (session.curve) {
     sub.set(zmq::sockopt::curve_serverkey, session.curve->input_keys.at(endpoint));
     sub.set(zmq::sockopt::curve_publickey, session.curve->host_public);

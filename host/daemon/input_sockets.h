@@ -34,6 +34,7 @@ class InputSockets {
  public:
   static constexpr int kSubscriberHwm = 20000;  // messages (~3 s of 8 cameras + a hub)
   static constexpr int64_t kRetryNs = 1'000'000'000;
+  static constexpr int kHeartbeatMs = 1000, kHeartbeatTimeoutMs = 3000;  // see SetUp
 
   explicit InputSockets(zmq::context_t& context) : context_(context) {}
 

@@ -4,10 +4,15 @@
 #include "input_sockets.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <zmq.h>
 
 #include <functional>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "curve_test_keys.h"
 
@@ -165,6 +170,76 @@ TEST(Inputs, AClosedPublisherIsReportedByItsInputsIndex) {
   EXPECT_EQ(closed, std::vector<size_t>{1});
   EXPECT_FALSE(inputs.links().at(1).connected);
   EXPECT_TRUE(inputs.links().at(0).connected);
+}
+
+// A publisher in a process of its own that sends until it is killed; its endpoint.
+pid_t ForkPublisher(std::string* endpoint) {
+  int fds[2];
+  if (pipe(fds) != 0) return -1;
+  const pid_t pid = fork();
+  if (pid == 0) {  // the child: a context of its own, never returns
+    close(fds[0]);
+    zmq::context_t context;
+    zmq::socket_t pub = Publisher(context, "tcp://127.0.0.1:*", "");
+    const std::string bound = pub.get(zmq::sockopt::last_endpoint);
+    if (write(fds[1], bound.data(), bound.size()) < 0) _exit(1);
+    close(fds[1]);
+    for (;;) {
+      pub.send(zmq::str_buffer("x"), zmq::send_flags::none);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  close(fds[1]);
+  char buffer[256];
+  const ssize_t n = read(fds[0], buffer, sizeof buffer);
+  close(fds[0]);
+  *endpoint = n > 0 ? std::string(buffer, static_cast<size_t>(n)) : "";
+  return pid;
+}
+
+// Polls the inputs for up to seconds_max; the messages received and the inputs closed.
+std::pair<int, std::vector<size_t>> Listen(InputSockets& inputs, double seconds_max,
+                                           const std::function<bool(int, size_t)>& done) {
+  int received = 0;
+  std::vector<size_t> closed;
+  const auto until = std::chrono::steady_clock::now() +
+                     std::chrono::milliseconds(static_cast<int64_t>(seconds_max * 1000));
+  while (std::chrono::steady_clock::now() < until && !done(received, closed.size())) {
+    inputs.Poll(std::chrono::milliseconds(5));
+    inputs.Drain([&](size_t, std::vector<zmq::message_t>&) { received++; });
+    inputs.Watch(0);
+    for (size_t i : inputs.TakeClosed()) closed.push_back(i);
+  }
+  return {received, closed};
+}
+
+// A box that hangs keeps its TCP connection open: the heartbeat finds it out (closing the
+// connection, reported like a box that went away), and the box is heard again once it runs.
+TEST(Inputs, AHungPublisherIsFoundOutByTheHeartbeatAndHeardAgainWhenItRuns) {
+  std::string endpoint;
+  const pid_t box = ForkPublisher(&endpoint);
+  ASSERT_GT(box, 0);
+  ASSERT_FALSE(endpoint.empty());
+  {
+    zmq::context_t context;
+    Session session;
+    session.inputs = {endpoint};
+    InputSockets inputs(context);
+    std::string error;
+    ASSERT_TRUE(inputs.Open(session, &error)) << error;
+    EXPECT_GE(Listen(inputs, 30, [](int received, size_t) { return received >= 10; }).first, 10);
+    kill(box, SIGSTOP);  // hung: its connection stays open, nothing answers
+    const auto stopped = std::chrono::steady_clock::now();
+    const auto [_, closed] = Listen(inputs, 30, [](int, size_t closed) { return closed > 0; });
+    const double found_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - stopped).count();
+    EXPECT_EQ(closed, std::vector<size_t>{0});
+    EXPECT_GE(found_s, 0.5 * InputSockets::kHeartbeatTimeoutMs / 1000.0);  // not by a close
+    kill(box, SIGCONT);
+    EXPECT_GE(Listen(inputs, 30, [](int received, size_t) { return received >= 10; }).first, 10);
+  }
+  kill(box, SIGKILL);
+  waitpid(box, nullptr, 0);
 }
 
 }  // namespace

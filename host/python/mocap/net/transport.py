@@ -23,6 +23,10 @@ from mocap.net.keys import ClientKeys, ServerKeys
 PUBLISHER_HWM = 2000  # messages: ~3 s of a camera at 60 fps plus slack
 SUBSCRIBER_HWM = 20000  # messages: ~3 s of 8 cameras + an IMU hub
 RECONNECT_MS = (100, 250)  # first retry, back-off ceiling (as mocapd's: a box back is found within 250 ms)
+# A subscriber pings each publisher every second and drops a connection unanswered for 3 s (as
+# mocapd's): a hung box or a pulled cable leaves its TCP connection open, and a SUB that sends
+# nothing would hold it for good, never connecting to the box once it is back.
+HEARTBEAT_MS = (1000, 3000)  # ping interval, timeout
 
 
 class _Allowed:
@@ -79,6 +83,8 @@ def subscriber(context: zmq.Context, endpoints: list[str], hwm: int = SUBSCRIBER
     socket.setsockopt(zmq.RCVHWM, hwm)
     socket.setsockopt(zmq.RECONNECT_IVL, RECONNECT_MS[0])
     socket.setsockopt(zmq.RECONNECT_IVL_MAX, RECONNECT_MS[1])
+    socket.setsockopt(zmq.HEARTBEAT_IVL, HEARTBEAT_MS[0])
+    socket.setsockopt(zmq.HEARTBEAT_TIMEOUT, HEARTBEAT_MS[1])
     socket.setsockopt(zmq.LINGER, 0)
     socket.setsockopt(zmq.SUBSCRIBE, b"")
     if keys is not None:
