@@ -21,11 +21,13 @@ std::vector<std::string> Names(const std::vector<T>& items) {
 constexpr int64_t kMaxClockOffsetNs = 10'000'000'000;
 
 bool OffClock(int64_t time_ns, int64_t now_ns) {
-  return now_ns - time_ns > kMaxClockOffsetNs || time_ns - now_ns > kMaxClockOffsetNs;
+  int64_t offset;  // a time from anywhere in int64's range (a broken sender) must not overflow
+  if (__builtin_sub_overflow(now_ns, time_ns, &offset)) return true;
+  return offset > kMaxClockOffsetNs || offset < -kMaxClockOffsetNs;
 }
 
 std::string OffClockDetail(int64_t time_ns, int64_t now_ns) {
-  return std::to_string(static_cast<double>(now_ns - time_ns) * 1e-9) +
+  return std::to_string((static_cast<double>(now_ns) - static_cast<double>(time_ns)) * 1e-9) +
          " s before its arrival, on another clock than the host's (a recording replayed without "
          "--restamp?)";
 }

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "mocap/v1/health.pb.h"
 #include "synthetic_scene.h"
 
@@ -268,6 +270,19 @@ TEST(InputPath, InputsOnAnotherClockThanTheArrivalAreDropped) {
   EXPECT_EQ(path.monitor().dropped().at("clock_offset"), 1 + studio.scene.imus.size());
   // Late by 9 s (a host far behind): late, but on the host's clock, so taken.
   EXPECT_TRUE(Feed(&path, studio.Keypoints(1, 0), kT0 + kFrame + 9000 * kMs));
+  // Times at the ends of int64's range (found by fuzz_wire: the latency and the offset
+  // overflowed): refused, on every path.
+  for (const int64_t t :
+       {std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max()}) {
+    v1::KeypointFrame frame = studio.Keypoints(2, 0);
+    frame.set_capture_time_ns(t);
+    EXPECT_FALSE(Feed(&path, frame, kT0, &why));
+    EXPECT_EQ(why.rfind("clock_offset", 0), 0u) << why;
+    v1::ImuBatch batch = studio.Imus(2);
+    batch.set_send_time_ns(t);
+    for (v1::ImuSample& sample : *batch.mutable_samples()) sample.set_sample_time_ns(t);
+    EXPECT_FALSE(Feed(&path, batch, kT0, &why));
+  }
 }
 
 // Camera 1's clock steps +1 s for 1 s (a PTP loss), then -1 s for 1 s: its frames are refused

@@ -34,7 +34,8 @@ bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t
 bool HostPipeline::FeedCalibration(const v1::Calibration& c, int64_t now_ns, std::string* why) {
   StreamStats& stats = input_.monitor().calibration();
   stats.received_in_period++;
-  stats.latency_ms.push_back(1e-6 * static_cast<double>(now_ns - c.valid_from_ns()));
+  stats.latency_ms.push_back(
+      1e-6 * (static_cast<double>(now_ns) - static_cast<double>(c.valid_from_ns())));
   std::string error;
   if (!calibrations_.Add(c, step_.solver(), &error))
     return input_.monitor().Drop("invalid_calibration", "from '" + c.source() + "': " + error, why);

@@ -7,7 +7,8 @@ namespace mocap {
 void StreamStats::Count(uint64_t counter, uint64_t modulo, int64_t time_ns, int64_t now_ns) {
   constexpr uint64_t kLargestGap = 1u << 20;
   received_in_period++;
-  latency_ms.push_back(1e-6 * static_cast<double>(now_ns - time_ns));
+  // in doubles: a time from anywhere in int64's range (a broken sender) must not overflow
+  latency_ms.push_back(1e-6 * (static_cast<double>(now_ns) - static_cast<double>(time_ns)));
   if (!last_counter) {
     last_counter = counter;
     last_time_ns = time_ns;
