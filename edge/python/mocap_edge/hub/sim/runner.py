@@ -16,6 +16,10 @@ from mocap_edge.hub.sim.node import SimulatedNode
 
 
 class NodeRunner(threading.Thread):
+    """The nodes on `bus`, which must not hand back the frames it sends (open_bus(uri,
+    own_messages=False)): every frame it receives is another's (python-can's is_rx cannot
+    tell: frames from this machine, SocketCAN's vcan, read as not received)."""
+
     def __init__(self, bus: can.BusABC, nodes: dict[int, SimulatedNode], motion: Motion, clock_ns=time.time_ns):
         super().__init__(daemon=True, name="sim-nodes")
         self.bus, self.nodes, self.motion, self.clock_ns = bus, nodes, motion, clock_ns
@@ -26,21 +30,29 @@ class NodeRunner(threading.Thread):
 
     def run(self) -> None:
         while not self.stopping.is_set():
-            message = self.bus.recv(timeout=0.001)
+            message = self._recv(0.001)
             while message is not None:  # every frame waiting
-                if message.is_rx and not message.is_error_frame:
+                if not message.is_error_frame:
                     # stamped when it reached the bus, as a node's CAN controller stamps it
                     now = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
                     for node in self.nodes.values():
                         for frame in node.on_frame(message.arbitration_id, bytes(message.data), now):
                             self._send(frame)
-                message = self.bus.recv(timeout=0.0)
+                message = self._recv(0.0)
             now = self.clock_ns()
             self._samples(now)
             if now >= self._next_heartbeat:
                 for node in self.nodes.values():
                     self._send(node.heartbeat(now))
                 self._next_heartbeat += 1_000_000_000
+
+    def _recv(self, timeout_s: float) -> can.Message | None:
+        """The next frame, or None; a bus that fails (its interface down) is waited out."""
+        try:
+            return self.bus.recv(timeout=timeout_s)
+        except can.CanOperationError:
+            time.sleep(0.05)
+            return None
 
     def stop(self) -> None:
         self.stopping.set()
