@@ -7,6 +7,7 @@ where QEMU cannot run at all. docs/devices.md says what the stand-ins model and 
 
 from __future__ import annotations
 
+import os
 import re
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
@@ -55,3 +56,19 @@ def test_in_the_vm(vm: boot.VmRun, case: str):
                     f"\n--- qemu\n{vm.text('qemu.log')[-2000:]}")
     outcome, text = outcomes(vm).get(case, ("missing", f"not in the in-VM results:\n{vm.text('pytest.log')[-3000:]}"))
     assert outcome == "passed", f"in the VM ({vm.results}):\n{text}"
+
+
+def test_a_vm_that_outlives_its_timeout_is_killed(tmp_path):
+    """Ended at the timeout (or when pytest is interrupted: the same finally), never left running."""
+    reason = boot.qemu_missing()
+    if reason:
+        pytest.skip(f"the device test VM cannot run here: {reason}")
+    done = boot.run(tmp_path, timeout_s=3.0)
+    assert done.timed_out and done.status is None and done.wall_s < 15
+    left = []
+    for entry in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            left += [entry] if str(tmp_path).encode() in Path(f"/proc/{entry}/cmdline").read_bytes() else []
+        except OSError:
+            continue  # ended while listed
+    assert not left, f"QEMU processes left running: {left}"
