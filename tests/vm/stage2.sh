@@ -32,7 +32,7 @@ step cam -l
 cd "$MOCAP_REPO" || exit 1
 echo "stage2 $(cut -d" " -f1 /proc/uptime): pytest" >> "$log"
 .venv/bin/python -m pytest -c tests/vm/guest/pytest.ini -p no:cacheprovider -q -rfE \
-  --junitxml="$out/junit.xml" tests/vm/guest > "$out/pytest.log" 2>&1
+  --durations=0 --junitxml="$out/junit.xml" tests/vm/guest > "$out/pytest.log" 2>&1
 status=$?
 echo "$status" > "$out/status"
 exit "$status"

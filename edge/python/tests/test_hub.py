@@ -384,4 +384,3 @@ def test_a_node_oscillator_holds_a_bounded_window_and_gives_the_same_times_withi
     assert len(keeping._node_us) <= 2 * keeping._keep + 2
     with pytest.raises(ValueError, match="before the kept window"):
         keeping.advance(0)
-
