@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
+import sys
+import time
 import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
@@ -58,6 +61,18 @@ def test_in_the_vm(vm: boot.VmRun, case: str):
     assert outcome == "passed", f"in the VM ({vm.results}):\n{text}"
 
 
+def qemu_running(results: Path) -> list[int]:
+    """The QEMU processes sharing `results` (from /proc)."""
+    found = []
+    for entry in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            command = Path(f"/proc/{entry}/cmdline").read_bytes()
+        except OSError:
+            continue  # ended while listed
+        found += [int(entry)] if command.startswith(boot.QEMU.encode()) and str(results).encode() in command else []
+    return found
+
+
 def test_a_vm_that_outlives_its_timeout_is_killed(tmp_path):
     """Ended at the timeout (or when pytest is interrupted: the same finally), never left running."""
     reason = boot.qemu_missing()
@@ -65,10 +80,24 @@ def test_a_vm_that_outlives_its_timeout_is_killed(tmp_path):
         pytest.skip(f"the device test VM cannot run here: {reason}")
     done = boot.run(tmp_path, timeout_s=3.0)
     assert done.timed_out and done.status is None and done.wall_s < 15
-    left = []
-    for entry in filter(str.isdigit, os.listdir("/proc")):
-        try:
-            left += [entry] if str(tmp_path).encode() in Path(f"/proc/{entry}/cmdline").read_bytes() else []
-        except OSError:
-            continue  # ended while listed
-    assert not left, f"QEMU processes left running: {left}"
+    assert not qemu_running(tmp_path)
+
+
+def test_qemu_ends_with_the_process_that_started_it_even_killed(tmp_path):
+    reason = boot.qemu_missing()
+    if reason:
+        pytest.skip(f"the device test VM cannot run here: {reason}")
+    starter = subprocess.Popen([sys.executable, str(Path(boot.__file__)), str(tmp_path)], stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 30
+        while not qemu_running(tmp_path) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert qemu_running(tmp_path), "QEMU did not start"
+    finally:
+        starter.kill()  # SIGKILL: no finally, no handler runs in it
+        starter.wait()
+    deadline = time.monotonic() + 10
+    while qemu_running(tmp_path) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not qemu_running(tmp_path), "QEMU outlived the process that started it"

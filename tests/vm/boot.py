@@ -2,26 +2,33 @@
 TCG (KVM does not work on the development machines), the host's root shared read-only over
 virtio-9p (the checkout, its .venv and the host's tools run unchanged inside), a results
 folder shared writable. The VM runs the in-VM tests (tests/vm/guest) and powers off; QEMU is
-killed when it outlives `timeout_s` or when the caller is interrupted: it never stays behind.
+killed when it outlives `timeout_s`, when the caller is interrupted, and when the process that started it
+ends however it ends (PR_SET_PDEATHSIG): it never stays behind.
 
-`python tests/vm/boot.py [RESULTS_DIR]` boots it from the command line (the in-VM pytest's
+`python tests/vm/boot.py [RESULTS_DIR] [--timeout S]` boots it from the command line (the in-VM pytest's
 log is printed; exit status that of the in-VM pytest).
 """
 
 from __future__ import annotations
 
+import argparse
+import ctypes
 import dataclasses
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import build  # noqa: E402  (this folder's module, also when run as a script)
+if __package__:  # imported: tests/test_devices_vm.py's `from vm import boot`
+    from . import build
+else:  # run as a script: its folder is on sys.path
+    import build
 
 QEMU = "qemu-system-x86_64"
+PR_SET_PDEATHSIG = 1  # prctl(2)
 TIMEOUT_S = 280.0  # the whole VM part stays under 5 minutes on 2 cores
 
 
@@ -65,7 +72,8 @@ def run(results: Path, timeout_s: float = TIMEOUT_S) -> VmRun:
         (results / stale).unlink(missing_ok=True)
     start = time.monotonic()
     with open(results / "qemu.log", "wb") as log:
-        qemu = subprocess.Popen(command(results), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+        qemu = subprocess.Popen(command(results), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                                preexec_fn=_die_with_parent)
     timed_out = False
     try:
         qemu.wait(timeout=timeout_s)
@@ -79,9 +87,20 @@ def run(results: Path, timeout_s: float = TIMEOUT_S) -> VmRun:
     return VmRun(results, int(status) if status.lstrip("-").isdigit() else None, time.monotonic() - start, timed_out)
 
 
+def _die_with_parent() -> None:
+    """In QEMU's process before exec: killed when the process that started it ends, however
+    it ends (a SIGKILL or SIGTERM runs no `finally`)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+
+
 def main() -> int:
-    results = Path(sys.argv[1] if len(sys.argv) > 1 else tempfile.mkdtemp(prefix="vm-results-")).resolve()
-    done = run(results)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("results", nargs="?", help="folder for the results (default: a new temporary one)")
+    parser.add_argument("--timeout", type=float, default=TIMEOUT_S, help="kill QEMU after this many seconds")
+    a = parser.parse_args()
+    results = Path(a.results or tempfile.mkdtemp(prefix="vm-results-")).resolve()
+    done = run(results, a.timeout)
     print(done.text("pytest.log") or done.text("console.log"))
     print(f"vm: {'timed out after' if done.timed_out else 'powered off after'} {done.wall_s:.1f} s; "
           f"in-VM pytest status {done.status}; results in {results}")
