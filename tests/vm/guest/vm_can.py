@@ -44,7 +44,8 @@ def studio(tmp_path_factory):
     runner.start()
     messages = Messages(ENDPOINT)
     hub = mocap_edge("imu-hub", "--can", "socketcan:vcan0", "--config", str(config), "--bind", ENDPOINT)
-    yield hub, messages, runner
+    started: list[bool] = []  # the first test appends once the hub publishes: the others need it
+    yield hub, messages, runner, started
     stop(hub)
     messages.close()
     runner.stop()
@@ -62,17 +63,25 @@ def bus_health(got):
     return [s for m in got if type(m).__name__ == "Health" for s in m.streams if s.stream == "bus"][-1]
 
 
+def running(studio):
+    """The hub, its messages and the nodes; fails at once when the hub never published."""
+    if not studio[3]:
+        pytest.fail("the hub never published its nodes' samples (the first test says why)")
+    return studio[:3]
+
+
 def test_the_hub_publishes_the_nodes_samples_received_on_vcan0(studio):
-    hub, messages, runner = studio
+    hub, messages, runner, started = studio
     assert messages.until(batches_of, START_S, hub), \
         f"no ImuBatch with {sorted(NAMES.values())} from the hub on vcan0 (hub ended: {hub.poll()})"
+    started.append(True)
     assert all(node.running and node.rate_hz == 30 for node in runner.nodes.values()), "the hub did not configure them"
     got = [s for m in messages.got if type(m).__name__ == "ImuBatch" for s in m.samples]
     assert all(abs(s.qw - 1.0) < 1e-3 and abs(s.az - 9.81) < 0.01 for s in got), "samples not the nodes' (still) ones"
 
 
 def test_garbage_frames_are_counted_by_reason_not_fatal(studio):
-    hub, messages, _ = studio
+    hub, messages, _ = running(studio)
     messages.until(lambda got: any(type(m).__name__ == "Health" for m in got), 5.0, hub)
     before = bus_health(messages.got).malformed
     for command in GARBAGE:
@@ -84,7 +93,7 @@ def test_garbage_frames_are_counted_by_reason_not_fatal(studio):
 
 
 def test_the_interface_down_is_counted_and_the_hub_goes_on_when_it_is_up(studio):
-    hub, messages, _ = studio
+    hub, messages, _ = running(studio)
     before = bus_health(messages.got).bus_errors
     sh("ip", "link", "set", "vcan0", "down")
     try:
@@ -97,7 +106,7 @@ def test_the_interface_down_is_counted_and_the_hub_goes_on_when_it_is_up(studio)
 
 
 def test_the_hub_ends_cleanly_with_the_counts_by_reason(studio):
-    hub, _, _ = studio
+    hub, _, _ = running(studio)
     err = stop(hub)
     assert hub.returncode == 0 and "Traceback" not in err, err
     dropped = ast.literal_eval(re.search(r"dropped (\{.*?\})", err).group(1))

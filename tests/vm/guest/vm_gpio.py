@@ -105,9 +105,11 @@ def test_a_line_another_process_holds_is_a_busy_error_naming_it(line):
         pass
 
 
-def test_a_chip_that_is_not_there_is_an_error_naming_it():
+def test_a_chip_or_line_that_is_not_there_is_an_error_naming_it(line):
     from mocap_edge.errors import TriggerError
     from mocap_edge.trigger import GpiodTrigger
 
     with pytest.raises(TriggerError, match="no GPIO chip at /dev/gpiochip9"):
         GpiodTrigger("/dev/gpiochip9", 0)
+    with pytest.raises(TriggerError, match=f"cannot request GPIO line 8 of {line[0]}"):
+        GpiodTrigger(line[0], 8)  # the chip has lines 0..7

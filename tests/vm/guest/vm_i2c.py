@@ -43,7 +43,7 @@ def test_the_driver_configures_the_chip_and_converts_its_fifo_packet(chip):
     import time
 
     from mocap_edge.hub.i2c import open_i2c
-    from mocap_edge.hub.i2c.driver import Icm42688
+    from mocap_edge.hub.i2c.driver import Icm42688, ProbeError
     from mocap_edge.hub.i2c.packets import parse
 
     driver = Icm42688(open_i2c(f"/dev/i2c-{BUS}"), ADDRESS, odr_hz=1000, acc_range_g=8, gyro_range_dps=1000)
@@ -62,6 +62,12 @@ def test_the_driver_configures_the_chip_and_converts_its_fifo_packet(chip):
     gyr = [math.radians(v * 1000 / 32768) for v in GYR]  # rad/s at ±1000 °/s
     assert packets.acc_mps2[0].tolist() == pytest.approx(acc, rel=1e-6)
     assert packets.gyr_rads[0].tolist() == pytest.approx(gyr, rel=1e-6)
+    sh("i2cset", "-y", str(BUS), hex(ADDRESS), hex(WHO_AM_I), "0x12", "b")  # another chip at the address
+    try:
+        with pytest.raises(ProbeError, match=f"no ICM-42688-P at I2C address 0x{ADDRESS:02x}: WHO_AM_I read 0x12"):
+            driver.probe()
+    finally:
+        sh("i2cset", "-y", str(BUS), hex(ADDRESS), hex(WHO_AM_I), "0x47", "b")
 
 
 def test_the_hub_publishes_the_chips_samples_and_names_the_address_that_does_not_answer(chip, tmp_path):
