@@ -2,6 +2,7 @@
 
 import can
 import numpy as np
+import pytest
 
 from mocap_edge.hub.config import HubConfig
 from mocap_edge.hub.hub import Hub
@@ -23,3 +24,13 @@ def test_frames_another_process_of_this_machine_sent_are_received():
         service._receive(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False, is_rx=False,
                                      timestamp=2.0))
     assert service.hub.frames == 1 and not service.hub.dropped  # the echoes were not fed as the nodes' frames
+
+
+def test_the_simulated_nodes_command_names_what_it_cannot_open(capsys):
+    from mocap_edge.hub.sim import runner
+
+    assert runner.main(["--can", "socketcan:nosuchcan0", "--nodes", "3,7"]) == 1
+    assert "--can socketcan:nosuchcan0" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        runner.main(["--can", "socketcan:vcan0", "--nodes", "3,64"])
+    assert "node ids 1..63" in capsys.readouterr().err

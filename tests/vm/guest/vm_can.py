@@ -1,18 +1,20 @@
-"""SocketCAN: the IMU hub (`python -m mocap_edge imu-hub --can socketcan:vcan0`, a process of
-its own) and simulated sensor nodes (mocap_edge.hub.sim's, on a python-can socketcan bus in
-this process) on the kernel's vcan0. The hub discovers and configures the nodes, decodes their
+"""SocketCAN: the IMU hub (`python -m mocap_edge imu-hub --can socketcan:vcan0`) and simulated
+sensor nodes (`python -m mocap_edge.hub.sim.runner --can socketcan:vcan0`), two processes on
+the kernel's vcan0. The hub discovers and configures the nodes, decodes their
 frames and publishes ImuBatch; garbage frames sent with can-utils are counted by reason; the
 interface taken down and up again is counted and logged, and the hub goes on. The tests run in
-order on one hub (its start takes ~10 s under TCG)."""
+order on one hub and one set of nodes (each process starts in ~10 s under TCG)."""
 
 from __future__ import annotations
 
 import ast
 import re
+import subprocess
+import sys
 import time
 
 import pytest
-from conftest import START_S, Messages, mocap_edge, sh, stop
+from conftest import REPO, START_S, Messages, mocap_edge, sh, stop
 
 NAMES = {3: "pelvis", 7: "forearm_l"}
 ENDPOINT = "ipc:///tmp/vm-can-hub"
@@ -26,30 +28,20 @@ UNKNOWN_IDS, BAD_LENGTHS = 23, 1
 
 @pytest.fixture(scope="module")
 def studio(tmp_path_factory):
-    """The simulated nodes (idle until the hub starts them), the hub, a subscriber."""
-    import numpy as np
-
-    from mocap_edge.hub.can_bus import open_bus
-    from mocap_edge.hub.sim.bus import make_nodes, still
-    from mocap_edge.hub.sim.runner import NodeRunner
-
+    """The simulated nodes (a process: idle until the hub starts them), the hub, a subscriber."""
     config = tmp_path_factory.mktemp("can") / "hub.toml"
     config.write_text("[hub]\nrate_hz = 30\nsync_hz = 20\n\n[nodes]\n"
                       + "".join(f'{i} = "{name}"\n' for i, name in NAMES.items()))
-    port = open_bus("socketcan:vcan0", own_messages=False)
-    nodes = make_nodes(list(NAMES), np.random.default_rng(1), rate_hz=30, origin_ns=time.time_ns())
-    for node in nodes.values():
-        node.running, node.state = False, "idle"
-    runner = NodeRunner(port.bus, nodes, still)
-    runner.start()
+    nodes = subprocess.Popen([sys.executable, "-m", "mocap_edge.hub.sim.runner", "--can", "socketcan:vcan0",
+                              "--nodes", ",".join(map(str, NAMES))], cwd=REPO, stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     messages = Messages(ENDPOINT)
     hub = mocap_edge("imu-hub", "--can", "socketcan:vcan0", "--config", str(config), "--bind", ENDPOINT)
     started: list[bool] = []  # the first test appends once the hub publishes: the others need it
-    yield hub, messages, runner, started
+    yield hub, messages, nodes, started
     stop(hub)
+    stop(nodes)
     messages.close()
-    runner.stop()
-    port.bus.shutdown()
 
 
 def batches_of(got, names=tuple(NAMES.values()), after_ns: int = 0) -> bool:
@@ -71,11 +63,11 @@ def running(studio):
 
 
 def test_the_hub_publishes_the_nodes_samples_received_on_vcan0(studio):
-    hub, messages, runner, started = studio
+    hub, messages, nodes, started = studio
     assert messages.until(batches_of, START_S, hub), \
-        f"no ImuBatch with {sorted(NAMES.values())} from the hub on vcan0 (hub ended: {hub.poll()})"
+        f"no ImuBatch with {sorted(NAMES.values())} from the hub on vcan0 (hub ended: {hub.poll()}, " \
+        f"nodes ended: {nodes.poll()})"
     started.append(True)
-    assert all(node.running and node.rate_hz == 30 for node in runner.nodes.values()), "the hub did not configure them"
     got = [s for m in messages.got if type(m).__name__ == "ImuBatch" for s in m.samples]
     assert all(abs(s.qw - 1.0) < 1e-3 and abs(s.az - 9.81) < 0.01 for s in got), "samples not the nodes' (still) ones"
 
@@ -105,9 +97,10 @@ def test_the_interface_down_is_counted_and_the_hub_goes_on_when_it_is_up(studio)
     assert messages.until(lambda got: batches_of(got, after_ns=up), 30.0, hub), "no batches once vcan0 was up again"
 
 
-def test_the_hub_ends_cleanly_with_the_counts_by_reason(studio):
-    hub, _, _ = running(studio)
-    err = stop(hub)
+def test_the_hub_and_the_nodes_end_cleanly_with_the_counts_by_reason(studio):
+    hub, _, nodes = running(studio)
+    err, nodes_err = stop(hub), stop(nodes)
+    assert nodes.returncode == 0 and "node 3 running at 30 Hz; node 7 running at 30 Hz" in nodes_err, nodes_err
     assert hub.returncode == 0 and "Traceback" not in err, err
     dropped = ast.literal_eval(re.search(r"dropped (\{.*?\})", err).group(1))
     assert dropped.get("unknown_id") == UNKNOWN_IDS and dropped.get("bad_length") == BAD_LENGTHS, err
