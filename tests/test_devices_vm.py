@@ -58,7 +58,8 @@ def test_in_the_vm(vm: boot.VmRun, case: str):
                     f"{vm.text('pytest.log')[-3000:]}\n--- console\n{vm.text('console.log')[-3000:]}"
                     f"\n--- qemu\n{vm.text('qemu.log')[-2000:]}")
     outcome, text = outcomes(vm).get(case, ("missing", f"not in the in-VM results:\n{vm.text('pytest.log')[-3000:]}"))
-    setup = "".join(line + "\n" for line in vm.text("setup.log").splitlines() if "FAILED" in line)
+    setup = "".join(line + "\n" for line in (vm.text("console.log") + vm.text("setup.log")).splitlines()
+                    if "FAILED" in line or "failed" in line and line.startswith("vm-init"))
     assert outcome == "passed", f"in the VM ({vm.results}):\n{text}" + (f"\ndevice setup:\n{setup}" if setup else "")
 
 
