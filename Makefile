@@ -4,7 +4,7 @@ BUILD  := build
 FUZZ_BUILD   := build-fuzz
 FUZZ_SECONDS := 60
 
-.PHONY: setup build fuzz-build fuzz test bench demo lint clean
+.PHONY: setup build vm fuzz-build fuzz test bench demo lint clean
 
 setup:            ## install Debian + pinned PyPI dependencies, create .venv (idempotent; root)
 	bash scripts/setup.sh
@@ -13,6 +13,10 @@ build:            ## configure and build the C++ host library, tests and Python 
 	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
 	cmake -S . -B $(BUILD) -G Ninja -DPython_EXECUTABLE=$(PY) -Wno-dev > /dev/null
 	cmake --build $(BUILD)
+
+vm:               ## the device test VM's modules and initramfs (tests/vm; cached in .cache/vm-*)
+	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
+	$(PY) tests/vm/build.py
 
 fuzz-build:       ## the libFuzzer targets (clang, ASan + UBSan) in their own build directory
 	@test -x $(PY) || { echo "run 'make setup' first"; exit 1; }
@@ -23,7 +27,7 @@ fuzz-build:       ## the libFuzzer targets (clang, ASan + UBSan) in their own bu
 fuzz: fuzz-build  ## every fuzz target for FUZZ_SECONDS each: one JSON line per target
 	nice -n 5 $(PY) scripts/fuzz.py --build $(FUZZ_BUILD) --seconds $(FUZZ_SECONDS)
 
-test: setup build fuzz-build ## every test of every part (installs what is missing first)
+test: setup build fuzz-build vm ## every test of every part (installs what is missing first)
 	ctest --test-dir $(BUILD) --output-on-failure
 	ctest --test-dir $(FUZZ_BUILD) --output-on-failure
 	$(PY) -m pytest -q

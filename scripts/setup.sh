@@ -13,6 +13,13 @@ DEBIAN_PACKAGES=(
   clang libclang-rt-14-dev
   libcamera-dev
 )
+# The device test VM (tests/vm): QEMU, the tools the in-VM tests run, the kernel headers and
+# source its two extra modules are built from. Its kernel is pinned in tests/vm/KERNEL.
+VM_KERNEL=$(cat tests/vm/KERNEL)
+DEBIAN_PACKAGES+=(
+  qemu-system-x86 busybox-static udev can-utils i2c-tools libcamera-tools libcamera-ipa
+  "linux-headers-$VM_KERNEL" linux-source-6.1
+)
 
 missing=()
 for p in "${DEBIAN_PACKAGES[@]}"; do
@@ -23,6 +30,18 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
   apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The VM's kernel image: extracted into .cache (never installed on this machine).
+vm_kernel=".cache/vm-$VM_KERNEL/kernel"
+if [ ! -f "$vm_kernel/boot/vmlinuz-$VM_KERNEL" ]; then
+  echo "setup: extracting linux-image-$VM_KERNEL into $vm_kernel"
+  download=$(mktemp -d)
+  chmod 1777 "$download"  # apt's download user writes there
+  (cd "$download" && apt-get download -q "linux-image-$VM_KERNEL")
+  rm -rf "$vm_kernel" && mkdir -p "$vm_kernel"
+  dpkg -x "$download"/linux-image-*.deb "$vm_kernel"
+  rm -rf "$download"
 fi
 
 # The Python environment uses Debian's interpreter, whatever else is on PATH.

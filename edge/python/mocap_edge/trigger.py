@@ -16,6 +16,7 @@ from __future__ import annotations
 import abc
 import collections
 import dataclasses
+import errno
 import importlib
 import logging
 import threading
@@ -48,7 +49,19 @@ def _request_line(chip: str, line: int, settings: object) -> object:
     except FileNotFoundError:
         raise TriggerError(f"no GPIO chip at {chip} (gpiodetect lists the chips of this board)") from None
     except (OSError, ValueError) as e:
+        if getattr(e, "errno", None) == errno.EBUSY:
+            raise TriggerError(f"GPIO line {line} of {chip} is busy: {_holder(gpiod, chip, line)} holds it") from None
         raise TriggerError(f"cannot request GPIO line {line} of {chip}: {e}") from None
+
+
+def _holder(gpiod: ModuleType, chip: str, line: int) -> str:
+    """Who requested the line (its consumer label), as far as the kernel says."""
+    try:
+        with gpiod.Chip(chip) as opened:
+            consumer = opened.get_line_info(line).consumer
+    except (OSError, ValueError):
+        consumer = None
+    return f"the consumer {consumer!r}" if consumer else "another process"
 
 
 class TriggerInput(abc.ABC):
@@ -161,13 +174,15 @@ class PairingCounts:
     paired: int = 0
     unpaired_frames: int = 0  # no edge within the tolerance: dropped
     unused_edges: int = 0  # no frame claimed them (the camera dropped a frame)
+    spurious_edges: int = 0  # less than half a period after the edge before: a glitch, not a trigger
 
 
 class TriggerPairing:
     """Pairs frames, in capture order, with the edge nearest to capture_time_ns - offset_ns
     within tolerance_ns (default a quarter period); a paired frame takes the edge's time as
     its capture time and the trigger count (edges since the first, missed ones inferred from
-    the gaps) as its index. A frame whose edge is not read yet waits, up to `max_pending`
+    the gaps) as its index; an edge less than half a period after the one before is a glitch
+    (a bounce, interference), counted and dropped. A frame whose edge is not read yet waits, up to `max_pending`
     frames; a frame with no edge in its window is dropped and counted."""
 
     def __init__(self, trigger: TriggerInput, rate_hz: float, tolerance_ns: int | None = None, offset_ns: int = 0,
@@ -201,6 +216,9 @@ class TriggerPairing:
 
     def _read_edges(self) -> None:
         for edge in self._trigger.read_edges():
+            if self._last_edge is not None and edge - self._last_edge[0] < self.period_ns // 2:
+                self.counts.spurious_edges += 1  # neither paired nor counted: the count stays right
+                continue
             count = 0 if self._last_edge is None else \
                 self._last_edge[1] + max(1, round((edge - self._last_edge[0]) / self.period_ns))
             self._last_edge = (edge, count)

@@ -37,7 +37,7 @@ def test_jittered_frames_take_their_edges_time_and_count() -> None:
     assert [f.index for f in paired] == list(range(COUNT))
     assert [f.capture_time_ns for f in paired] == [trigger.edge_time(k) for k in range(COUNT)]
     assert [f.image is g.image for f, g in zip(paired, frames, strict=True)] == [True] * COUNT
-    assert dataclasses.astuple(pairing.counts) == (COUNT, 0, 0)
+    assert dataclasses.astuple(pairing.counts) == (COUNT, 0, 0, 0)
     edges = [trigger.edge_time(k) - START_NS - k * trigger.period_ns for k in range(COUNT)]
     assert max(map(abs, edges)) <= 200_000 and len(set(edges)) > 1  # jittered, within bounds
 
@@ -48,7 +48,7 @@ def test_a_missed_edge_leaves_its_frame_unpaired_and_the_count_keeps_going() -> 
     paired = list(pairing.pair(camera_frames(trigger)))
     assert [f.index for f in paired] == [k for k in range(COUNT) if k != 7]  # 8 follows 6: the gap is seen
     assert [f.capture_time_ns for f in paired] == [trigger.edge_time(k) for k in range(COUNT) if k != 7]
-    assert dataclasses.astuple(pairing.counts) == (COUNT - 1, 1, 0)
+    assert dataclasses.astuple(pairing.counts) == (COUNT - 1, 1, 0, 0)
 
 
 def test_a_dropped_frame_leaves_its_edge_unused() -> None:
@@ -56,7 +56,29 @@ def test_a_dropped_frame_leaves_its_edge_unused() -> None:
     pairing = TriggerPairing(trigger, RATE)
     paired = list(pairing.pair(camera_frames(trigger, skip=(3, 4))))
     assert [f.index for f in paired] == [k for k in range(COUNT) if k not in (3, 4)]
-    assert dataclasses.astuple(pairing.counts) == (COUNT - 2, 0, 2)
+    assert dataclasses.astuple(pairing.counts) == (COUNT - 2, 0, 2, 0)
+
+
+class Edges(FakeTrigger):
+    """FakeTrigger's edges and extra ones (a glitch on the line)."""
+
+    def __init__(self, extra: list[int], **options) -> None:
+        super().__init__(**options)
+        self.extra = extra
+
+    def read_edges(self, timeout_s: float = 0.0) -> list[int]:
+        edges, self.extra = sorted(super().read_edges(timeout_s) + self.extra), []
+        return edges
+
+
+def test_a_spurious_edge_is_counted_and_the_count_keeps_right() -> None:
+    trigger = Edges([START_NS + round(6.4e9 / RATE)], rate_hz=RATE, start_ns=START_NS, count=COUNT,
+                    clock=lambda: EVER)
+    pairing = TriggerPairing(trigger, RATE)
+    paired = list(pairing.pair(camera_frames(trigger)))
+    assert [f.index for f in paired] == list(range(COUNT))
+    assert [f.capture_time_ns for f in paired] == [trigger.edge_time(k) for k in range(COUNT)]
+    assert dataclasses.astuple(pairing.counts) == (COUNT, 0, 0, 1)
 
 
 def test_an_edge_read_after_its_frame_still_pairs() -> None:
@@ -72,7 +94,7 @@ def test_an_edge_read_after_its_frame_still_pairs() -> None:
     now[0] = EVER
     paired += pairing.flush()
     assert [(f.index, f.capture_time_ns) for f in paired] == [(k, trigger.edge_time(k)) for k in range(COUNT)]
-    assert dataclasses.astuple(pairing.counts) == (COUNT, 0, 0)
+    assert dataclasses.astuple(pairing.counts) == (COUNT, 0, 0, 0)
 
 
 def test_frames_wait_for_edges_only_up_to_max_pending() -> None:

@@ -31,6 +31,7 @@ ECHOING = ("socketcan", "virtual")
 class CanPort:
     bus: can.BusABC
     echoes: bool  # the bus hands back the frames it sent, stamped when they left
+    name: str = "the CAN bus"  # in messages: the URI it was opened from
 
 
 def open_bus(uri: str, own_messages: bool = True) -> CanPort:
@@ -48,7 +49,7 @@ def open_bus(uri: str, own_messages: bool = True) -> CanPort:
         options = {"receive_own_messages": own_messages} if interface in ECHOING else {"bitrate": 1_000_000}
     try:
         bus = can.Bus(interface=interface, **{"channel": channel, **options})
-        return CanPort(bus, own_messages and interface in ECHOING)
+        return CanPort(bus, own_messages and interface in ECHOING, f"--can {uri}")
     except (can.CanError, OSError, ValueError, TimeoutError) as e:
         raise EdgeError(f"--can {uri}: {e}") from None
 

@@ -10,6 +10,7 @@ the kernel (SocketCAN's restart-ms) or the adapter recovers the bus.
 from __future__ import annotations
 
 import contextlib
+import logging
 import time
 
 import can
@@ -20,9 +21,12 @@ from mocap.net.keys import ServerKeys
 from mocap_edge.errors import EdgeError
 from mocap_edge.hub.bus_errors import BusErrors
 from mocap_edge.hub.can_bus import CanPort
+from mocap_edge.hub.can_db import NODE_ID_MASK
 from mocap_edge.hub.hub import Hub
 
+log = logging.getLogger(__name__)
 SYNC_ID = 0x080
+HUB_IDS = (SYNC_ID, 0x600)  # the frame ids (less the node id) of the hub's messages: Sync, Command
 DRAIN = 64  # frames fed before the timers are looked at again
 RETRY_S = 0.1  # after the adapter failed
 REOPEN_NS = 1_000_000_000  # between attempts to open a link that went away
@@ -46,6 +50,7 @@ class HubService:
         self.bus_errors = BusErrors()
         self.configured: dict[int, int] = {}  # node id -> its reboots when it was configured
         self._sync_seq = 0
+        self._refused = 0  # sends refused in a row (logged when it starts and when it ends)
 
     def run(self, stop, duration_s: float = 0.0) -> int:
         """Runs until stop() is true (or duration_s passed, if > 0); returns batches published.
@@ -131,10 +136,16 @@ class HubService:
             self.port.bus.send(can.Message(arbitration_id=frame_id, data=data, is_extended_id=False), timeout=0.01)
         except (can.CanOperationError, OSError) as e:  # socketcand's socket raises OSError
             self.bus_errors.send_refused(e)
+            if not self._refused:
+                log.warning("%s: send refused (%s): counted, the hub goes on", self.port.name, e)
+            self._refused += 1
             if isinstance(e, ConnectionError):  # the link's peer is gone (a TCP link)
                 self._lose_link()
             return False
         self.bus_errors.send_succeeded()
+        if self._refused:
+            log.warning("%s: sending again after %d refused sends", self.port.name, self._refused)
+            self._refused = 0
         return True
 
     def _lose_link(self) -> None:
@@ -166,7 +177,10 @@ class HubService:
             self.bus_errors.error_frame(message)
             return
         stamp = int(round(message.timestamp * 1e9)) if message.timestamp else self.clock_ns()
-        if not message.is_rx:  # our own frame, echoed: a Sync's echo is its transmit time
+        if not message.is_rx and (message.arbitration_id & ~NODE_ID_MASK) in HUB_IDS:
+            # our own frame, echoed: a Sync's echo is its transmit time. python-can marks every
+            # frame sent from this machine as not received (SocketCAN's MSG_DONTROUTE), another
+            # process's too (vcan, can-utils): only the kinds the hub sends are taken as its own.
             if message.arbitration_id == SYNC_ID and len(message.data) == 1:
                 self.hub.sync_sent(message.data[0], stamp)
             return

@@ -48,6 +48,7 @@ class SmbusPort:
             import smbus2
         except ImportError as e:
             raise I2cError(f"i2c:{bus_number}: the smbus2 module is missing (pip install smbus2): {e}") from None
+        self.name = f"/dev/i2c-{bus_number}"  # in messages
         try:
             self._bus = smbus2.SMBus(bus_number)
         except OSError as e:

@@ -68,6 +68,7 @@ class I2cImu:
         self.stuck_samples = odr_hz if stuck_samples is None else stuck_samples  # 1 s by default
         self.counts = I2cCounts()
         self.last_error: str | None = None  # the latest bus or probe problem, for Health
+        self._unanswered: str | None = None  # why the latest probe failed (logged once), None once it answers
         self.timer = SampleTimer(1e9 / odr_hz)
         self.filter = OrientationFilter(1.0 / odr_hz)
         self.running = False  # probed and configured
@@ -118,11 +119,20 @@ class I2cImu:
                 self.counts.resets += 1
         except (OSError, ProbeError) as e:
             self.counts.nacks += isinstance(e, OSError)
-            self.last_error = str(e) if isinstance(e, ProbeError) else f"0x{self.chip.address:02x}: {e}"
+            error = str(e) if isinstance(e, ProbeError) else f"0x{self.chip.address:02x}: {e}"
+            if self._unanswered != error:  # said once, not at every probe
+                log.warning("%s: %s on %s: probed again every %g s", self.name, error, self._bus_name(),
+                            self.reprobe_ns * 1e-9)
+            self.last_error = self._unanswered = error
             self._next_probe_ns = now_ns + self.reprobe_ns
             return
-        self.running, self._force_reset, self._failed_polls = True, False, 0
+        if self._unanswered is not None:
+            log.warning("%s: ICM-42688-P at 0x%02x on %s answers again", self.name, self.chip.address, self._bus_name())
+        self.running, self._force_reset, self._failed_polls, self._unanswered = True, False, 0, None
         log.info("%s: ICM-42688-P at 0x%02x %s", self.name, self.chip.address, "resumed" if resume else "configured")
+
+    def _bus_name(self) -> str:
+        return getattr(self.chip.port, "name", "the hub's I2C bus")
 
     def _bus_failed(self, error: OSError, now_ns: int) -> None:
         self.counts.nacks += 1
