@@ -14,8 +14,21 @@ DEBIAN_PACKAGES=(
   libcamera-dev
 )
 # The device test VM (tests/vm): QEMU, the tools the in-VM tests run, the kernel headers and
-# source its two extra modules are built from. Its kernel is pinned in tests/vm/KERNEL.
+# source its two extra modules are built from. Its kernel is pinned in tests/vm/KERNEL while
+# Debian's archive has it; once the archive has moved to a newer kernel ABI (the old headers
+# package leaves it), the one linux-image-amd64 depends on, with a warning. The choice goes to
+# .cache/vm-kernel, which tests/vm/build.py reads.
 VM_KERNEL=$(cat tests/vm/KERNEL)
+if ! apt-cache show "linux-headers-$VM_KERNEL" >/dev/null 2>&1; then
+  apt-get update -qq
+  if ! apt-cache show "linux-headers-$VM_KERNEL" >/dev/null 2>&1; then
+    pinned=$VM_KERNEL
+    VM_KERNEL=$(apt-cache depends linux-image-amd64 | sed -n 's/^ *Depends: linux-image-//p' | head -n 1)
+    echo "setup: warning: linux-headers-$pinned is no longer in Debian's archive; the device test VM" \
+         "uses $VM_KERNEL (update tests/vm/KERNEL)"
+  fi
+fi
+mkdir -p .cache && echo "$VM_KERNEL" > .cache/vm-kernel
 DEBIAN_PACKAGES+=(
   qemu-system-x86 busybox-static udev can-utils i2c-tools libcamera-tools libcamera-ipa
   "linux-headers-$VM_KERNEL" linux-source-6.1
