@@ -1,7 +1,9 @@
 #include "capture.h"
 
+#include <fcntl.h>
 #include <libcamera/libcamera.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -39,6 +41,20 @@ std::string Names(const std::vector<std::string>& ids) {
   return out.empty() ? "none" : out;
 }
 
+// The media devices another process holds: libcamera locks a camera's media device while a
+// process uses it (lockf), and another process then does not list that camera at all.
+std::string BusyMediaDevices() {
+  std::string busy;
+  for (int n = 0; n < 64; ++n) {
+    const std::string path = "/dev/media" + std::to_string(n);
+    const int fd = open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) continue;
+    if (lockf(fd, F_TEST, 0) != 0) busy += (busy.empty() ? "" : ", ") + path;
+    close(fd);
+  }
+  return busy;
+}
+
 // The camera `wanted` names: an index into ListCameras' order, or an id.
 std::shared_ptr<libcamera::Camera> Find(libcamera::CameraManager& manager,
                                         const std::string& wanted) {
@@ -51,9 +67,11 @@ std::shared_ptr<libcamera::Camera> Find(libcamera::CameraManager& manager,
   if (!index)
     for (const auto& camera : cameras)
       if (camera->id() == wanted) return camera;
+  const std::string busy = BusyMediaDevices();
   throw CaptureError("libcamera: no camera " + wanted + " (found " +
-                     std::to_string(cameras.size()) + ": " + Names(ids) +
-                     "); `cam -l` lists them, and a camera appears only once udev has run");
+                     std::to_string(cameras.size()) + ": " + Names(ids) + ")" +
+                     (busy.empty() ? "" : "; " + busy + " in use by another process") +
+                     "; `cam -l` lists them, and a camera appears only once udev has run");
 }
 
 std::string Describe(const CaptureConfig& config) {
