@@ -152,7 +152,10 @@ void Capture::MapBuffers() {
   if (allocator_->allocate(stream_) < 0)
     throw CaptureError("libcamera: camera " + id_ + ": buffers could not be allocated");
   for (const std::unique_ptr<libcamera::FrameBuffer>& buffer : allocator_->buffers(stream_)) {
-    const libcamera::FrameBuffer::Plane& plane = buffer->planes().at(0);
+    if (buffer->planes().empty())
+      throw CaptureError("libcamera: camera " + id_ + ": a buffer without a plane");
+    // planes() is a std::vector up to 0.0.x and a Span (no at()) since: [] serves both
+    const libcamera::FrameBuffer::Plane& plane = buffer->planes()[0];
     const size_t length = plane.offset + plane.length;
     void* memory = mmap(nullptr, length, PROT_READ, MAP_SHARED, plane.fd.get(), 0);
     if (memory == MAP_FAILED)

@@ -5,10 +5,11 @@
 // frame's sequence number, whose gaps count the frames the camera dropped.
 //
 // libcamera's API changed between Debian 12's 0.0.3 and the releases Yocto and Raspberry Pi
-// OS ship (>= 0.3). What this file uses is the same in both (CameraManager, generateConfiguration
-// on a list of roles, FrameBufferAllocator, Request::reuse, the SensorTimestamp, ExposureTime
-// and FrameDurationLimits controls, ControlList::get returning std::optional); version.h's
-// numbers are reported so a box's log says which it runs. Built and tested against 0.0.3 only.
+// OS ship (0.3 and later): FrameBuffer::planes() became a Span (no at()), generateConfiguration
+// takes a Span of roles (a std::vector converts), StreamRole became an enum class (qualified
+// names serve both). The code is written in the subset both accept, so no <libcamera/version.h>
+// branch is needed; LibcameraVersion() reports the version built against. Built and tested
+// against 0.0.3; compiled against 0.7.2's headers (docs/devices.md, "The libcamera adapter").
 #ifndef MOCAP_EDGE_LIBCAMERA_CAPTURE_H_
 #define MOCAP_EDGE_LIBCAMERA_CAPTURE_H_
 
