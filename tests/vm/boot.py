@@ -61,6 +61,7 @@ def command(results: Path) -> list[str]:
             "-serial", f"file:{results / 'console.log'}", "-no-reboot", "-nic", "none",
             "-kernel", str(build.VMLINUZ), "-initrd", str(build.INITRAMFS), "-append", append,
             "-virtfs", f"{share},path=/,mount_tag=hostroot,readonly=on",
+            "-virtfs", f"{share},path={build.ROOT},mount_tag=repo,readonly=on",
             "-virtfs", f"{share},path={results},mount_tag=results"]
 
 
