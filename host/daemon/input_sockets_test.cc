@@ -134,6 +134,22 @@ TEST(Inputs, WithoutKeysAPlainPublisherIsHeard) {
   EXPECT_TRUE(inputs.links().at(0).connected);
 }
 
+// Polls the inputs for up to seconds_max; the messages received and the inputs closed.
+std::pair<int, std::vector<size_t>> Listen(InputSockets& inputs, double seconds_max,
+                                           const std::function<bool(int, size_t)>& done) {
+  int received = 0;
+  std::vector<size_t> closed;
+  const auto until = std::chrono::steady_clock::now() +
+                     std::chrono::milliseconds(static_cast<int64_t>(seconds_max * 1000));
+  while (std::chrono::steady_clock::now() < until && !done(received, closed.size())) {
+    inputs.Poll(std::chrono::milliseconds(5));
+    inputs.Drain([&](size_t, std::vector<zmq::message_t>&) { received++; });
+    inputs.Watch(0);
+    for (size_t i : inputs.TakeClosed()) closed.push_back(i);
+  }
+  return {received, closed};
+}
+
 // A box that goes away (its process ended, its socket closed) is reported at once, by the
 // index its messages came with, so the host stops waiting for its frames.
 TEST(Inputs, AClosedPublisherIsReportedByItsInputsIndex) {
@@ -160,13 +176,7 @@ TEST(Inputs, AClosedPublisherIsReportedByItsInputsIndex) {
   ASSERT_GE(received[1], 3);
   EXPECT_TRUE(inputs.TakeClosed().empty());
   second.close();
-  std::vector<size_t> closed;
-  for (int i = 0; i < 1000 && closed.empty(); ++i) {
-    inputs.Poll(std::chrono::milliseconds(5));
-    inputs.Drain([](size_t, std::vector<zmq::message_t>&) {});  // what was in flight
-    inputs.Watch(0);
-    closed = inputs.TakeClosed();
-  }
+  const auto [_, closed] = Listen(inputs, 5, [](int, size_t closed) { return closed > 0; });
   EXPECT_EQ(closed, std::vector<size_t>{1});
   EXPECT_FALSE(inputs.links().at(1).connected);
   EXPECT_TRUE(inputs.links().at(0).connected);
@@ -195,22 +205,6 @@ pid_t ForkPublisher(std::string* endpoint) {
   close(fds[0]);
   *endpoint = n > 0 ? std::string(buffer, static_cast<size_t>(n)) : "";
   return pid;
-}
-
-// Polls the inputs for up to seconds_max; the messages received and the inputs closed.
-std::pair<int, std::vector<size_t>> Listen(InputSockets& inputs, double seconds_max,
-                                           const std::function<bool(int, size_t)>& done) {
-  int received = 0;
-  std::vector<size_t> closed;
-  const auto until = std::chrono::steady_clock::now() +
-                     std::chrono::milliseconds(static_cast<int64_t>(seconds_max * 1000));
-  while (std::chrono::steady_clock::now() < until && !done(received, closed.size())) {
-    inputs.Poll(std::chrono::milliseconds(5));
-    inputs.Drain([&](size_t, std::vector<zmq::message_t>&) { received++; });
-    inputs.Watch(0);
-    for (size_t i : inputs.TakeClosed()) closed.push_back(i);
-  }
-  return {received, closed};
 }
 
 // A box that hangs keeps its TCP connection open: the heartbeat finds it out (closing the

@@ -207,9 +207,7 @@ def test_the_hub_on_a_python_can_bus_publishes_what_nodes_sent():
 
     hub_port, nodes_port = open_bus("virtual:test_hub_live"), open_bus("virtual:test_hub_live", own_messages=False)
     start = time.time_ns()
-    nodes = make_nodes(list(NAMES) + [40], np.random.default_rng(2), rate_hz=30, origin_ns=start)
-    for node in nodes.values():
-        node.running, node.state = False, "idle"
+    nodes = make_nodes(list(NAMES) + [40], np.random.default_rng(2), rate_hz=30, origin_ns=start, running=False)
     runner = NodeRunner(nodes_port.bus, nodes, turning)
     published = []
     config = HubConfig(dict(NAMES), rate_hz=60, sync_hz=50)

@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import importlib
 import os
-import time
 
-from mocap_edge.clocks import realtime_offset_ns
 from mocap_edge.errors import SourceError
 from mocap_edge.sources.base import Frame, FrameSource
+from mocap_edge.sources.pi_camera import LibcameraSource, mid_exposure_ns
 
 FRAME_TIMEOUT_S = 2.0  # a camera silent this long has stopped: an error, not the end of the take
 NOT_BUILT_HINT = ("neither picamera2 (Raspberry Pi OS: apt install python3-picamera2) nor the project's "
@@ -31,8 +30,6 @@ def open_libcamera(camera: str, width: int = 1280, height: int = 720, fps: float
         importlib.import_module("picamera2")
     except ImportError:
         return LibcameraCaptureSource(camera, width, height, fps, buffer_count)
-    from mocap_edge.sources.pi_camera import LibcameraSource
-
     return LibcameraSource(camera, width, height, fps, buffer_count)
 
 
@@ -78,8 +75,7 @@ class LibcameraCaptureSource(FrameSource):
             self.dropped = self._capture.dropped + self._capture.failed + self._untimed
             if sensor_ns is None:
                 continue
-            mid_exposure = sensor_ns - (exposure_us or 0) * 500
-            return Frame(image, sequence - self._first_sequence, mid_exposure + realtime_offset_ns(time.CLOCK_MONOTONIC))
+            return Frame(image, sequence - self._first_sequence, mid_exposure_ns(sensor_ns, exposure_us))
 
     def _release(self) -> None:
         self._capture.close()

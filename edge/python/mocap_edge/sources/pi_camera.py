@@ -27,6 +27,12 @@ PICAMERA2_HINT = ("Raspberry Pi OS: apt install python3-picamera2, and make the 
                   "--system-site-packages")
 
 
+def mid_exposure_ns(sensor_timestamp_ns: int, exposure_us: int | None) -> int:
+    """The first row's exposure mid-point on the shared timebase (CLOCK_REALTIME) from a
+    request's SensorTimestamp (CLOCK_MONOTONIC) and ExposureTime (us; None: unknown, 0)."""
+    return sensor_timestamp_ns - (exposure_us or 0) * 500 + realtime_offset_ns(time.CLOCK_MONOTONIC)
+
+
 class LibcameraSource(FrameSource):
     def __init__(self, camera: str, width: int = 1280, height: int = 720, fps: float = 60.0,
                  buffer_count: int = 4) -> None:
@@ -58,9 +64,8 @@ class LibcameraSource(FrameSource):
                 request.release()  # buffers go back to libcamera at once
             index, self._index = self._index, self._index + 1
             if "SensorTimestamp" in metadata:
-                mid_exposure = metadata["SensorTimestamp"] - metadata.get("ExposureTime", 0) * 500
                 return Frame(np.ascontiguousarray(image[:, :, :3]), index,
-                             mid_exposure + realtime_offset_ns(time.CLOCK_MONOTONIC))
+                             mid_exposure_ns(metadata["SensorTimestamp"], metadata.get("ExposureTime")))
             self.dropped += 1
 
     def _release(self) -> None:

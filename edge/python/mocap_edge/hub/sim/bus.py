@@ -35,11 +35,14 @@ class BusConditions:
 
 
 def make_nodes(ids: list[int], rng: np.random.Generator, rate_hz: int = 60,
-               conditions: BusConditions = BusConditions(), origin_ns: int = 0) -> dict[int, SimulatedNode]:
-    """Nodes with clocks off by up to ±conditions.ppm, timers started anywhere, at origin_ns."""
+               conditions: BusConditions = BusConditions(), origin_ns: int = 0,
+               running: bool = True) -> dict[int, SimulatedNode]:
+    """Nodes with clocks off by up to ±conditions.ppm, timers started anywhere, at origin_ns;
+    running, or idle until a hub starts them."""
     db = Database(checked=False)  # the nodes clip their values into the signals' ranges
     return {i: SimulatedNode(i, NodeOscillator(rng.uniform(-conditions.ppm, conditions.ppm), rng.uniform(0, WRAP_US),
-                                               conditions.walk_ppm_per_sqrt_s, rng, origin_ns), rate_hz, db)
+                                               conditions.walk_ppm_per_sqrt_s, rng, origin_ns), rate_hz, db,
+                          running)
             for i in ids}
 
 

@@ -106,9 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     except EdgeError as e:
         print(f"sim nodes: {e}", file=sys.stderr)
         return 1
-    nodes = make_nodes(ids, np.random.default_rng(a.seed), origin_ns=time.time_ns())
-    for node in nodes.values():
-        node.running, node.state = False, "idle"
+    nodes = make_nodes(ids, np.random.default_rng(a.seed), origin_ns=time.time_ns(), running=False)
     stopping = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stopping.set())

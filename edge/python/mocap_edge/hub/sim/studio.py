@@ -69,9 +69,7 @@ class StudioNodes:
         self.streams, self.start_ns, self.unplugged = streams, start_ns, unplugged
         self.sensor = _sensor_indices(streams, config)
         self.nodes = make_nodes(sorted(self.sensor), np.random.default_rng(seed), config.rate_hz,
-                                BusConditions(), origin_ns=now_ns)
-        for node in self.nodes.values():
-            node.running, node.state = False, "idle"
+                                BusConditions(), origin_ns=now_ns, running=False)
         self._index = 0  # the next stream sample
         self._next_heartbeat = now_ns
 
