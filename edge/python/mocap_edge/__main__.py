@@ -101,15 +101,29 @@ def _keys(a: argparse.Namespace) -> ServerKeys | None:
     return ServerKeys(pair, allowed)
 
 
-def main(argv: list[str] | None = None) -> int:
+def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line checked as far as it can be without opening a device (exits with a
+    usage error otherwise): what the box's systemd units are tested with."""
     p = parser()
     a = p.parse_args(argv)
-    if a.start_ns is None:
-        a.start_ns = time.time_ns()
     missing = {"camera": ["source", "bind"], "imu-hub": ["config", "bind"],
                "sim-nodes": ["streams", "config", "port"]}[a.role]
     if any(getattr(a, m) is None for m in missing):
         p.error(f"role {a.role} needs {', '.join('--' + m for m in missing)}")
+    try:  # the specs read when the box starts its source and trigger
+        if a.size:
+            _size(a.size, a.source.partition(":")[0])
+        if a.trigger:
+            _trigger_spec(a.trigger)
+    except EdgeError as e:
+        p.error(str(e))
+    return a
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = parse_arguments(argv)
+    if a.start_ns is None:
+        a.start_ns = time.time_ns()
     try:
         if a.role == "imu-hub":
             return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration, _keys(a))
@@ -185,11 +199,15 @@ def _model(a: argparse.Namespace) -> Detector:
     return open_detector(spec)
 
 
-def _trigger(spec: str) -> GpiodTrigger:
+def _trigger_spec(spec: str) -> tuple[str, int]:
     chip, _, line = spec.rpartition(":")
     if not chip or not line.isdigit():
         raise TriggerError(f"--trigger {spec}: expected CHIP:LINE, e.g. /dev/gpiochip0:17")
-    return GpiodTrigger(chip, int(line))
+    return chip, int(line)
+
+
+def _trigger(spec: str) -> GpiodTrigger:
+    return GpiodTrigger(*_trigger_spec(spec))
 
 
 if __name__ == "__main__":

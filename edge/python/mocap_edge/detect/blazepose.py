@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap_edge import resources
 from mocap_edge.detect import anchors, decoders, layouts, roi
 from mocap_edge.detect.base import Crop, Detector, Person
 from mocap_edge.detect.onnx import OnnxNetwork
 
-MODELS = Path(__file__).resolve().parents[3] / "models" / "blazepose"
 DETECTOR_SIZE, LANDMARK_SIZE = 224, 256
 KEYPOINTS = 33  # plus 2 auxiliary (tracking) landmarks in the model's 39 x 5 output
 OUTPUTS = ["Identity", "Identity_1", "Identity_3"]  # landmarks, pose flag, heatmap (64 x 64 x 39)
@@ -28,14 +28,14 @@ __all__ = ["BlazePose", "Person"]
 
 
 class BlazePose(Detector):
-    """models: the folder of the two ONNX files (default edge/models/blazepose).
+    """models: the folder of the two ONNX files (default: mocap_edge.resources.models_dir).
     min_detection: the person detector's score threshold; min_presence: the landmark
     model's pose flag below which a tracked person is lost."""
 
     def __init__(self, models: str | Path = "", threads: int = 2, min_detection: float = 0.5,
                  min_presence: float = 0.5) -> None:
         super().__init__(layouts.load("blazepose33"), min_presence)
-        folder = Path(models) if models else MODELS
+        folder = Path(models) if models else resources.models_dir("blazepose")
         self.detector = OnnxNetwork(folder / "pose_detection.onnx", threads)
         self.landmarker = OnnxNetwork(folder / "pose_landmark_full.onnx", threads)
         self.anchors = anchors.ssd_anchors()

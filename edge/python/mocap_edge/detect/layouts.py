@@ -7,14 +7,11 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
-from pathlib import Path
 
 import numpy as np
 
-# The layout files the host solver reads too (host/data/layouts; mocap.paths.LAYOUTS there):
-# found beside the edge package, as the models are (detect/blazepose.py), since the edge
-# imports nothing of the host but its wire (mocap.net).
-LAYOUTS = Path(__file__).resolve().parents[4] / "host" / "data" / "layouts"
+from mocap_edge import resources
+
 
 # Body part of a sided keypoint: the first group with a word in its name (legs before arms:
 # "foot_index" is a foot).
@@ -56,5 +53,5 @@ def layout(names: list[str], name: str) -> Layout:
 
 def load(name: str) -> Layout:
     """A layout of host/data/layouts by name ("blazepose33", "coco17", "body25b")."""
-    data = json.loads((LAYOUTS / f"{name}.json").read_text())
+    data = json.loads((resources.layouts_dir() / f"{name}.json").read_text())
     return layout([k["name"] for k in data["keypoints"]], data.get("name", name))

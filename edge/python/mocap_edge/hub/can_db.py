@@ -11,12 +11,12 @@ message, or a hub's message from a node).
 from __future__ import annotations
 
 import dataclasses
-import os
 from pathlib import Path
 
 import cantools
 
-DBC = Path(os.environ.get("MOCAP_CAN_DBC", Path(__file__).resolve().parents[4] / "proto/can/mocap_imu.dbc"))
+from mocap_edge import resources
+
 NODE_ID_MASK = 0x3F
 FROM_HUB = ("Sync", "Command")
 STATES = {0: "boot", 1: "idle", 2: "running", 3: "fault"}
@@ -39,10 +39,10 @@ class NodeFrame:
 
 
 class Database:
-    def __init__(self, path: Path = DBC, checked: bool = True):
-        """checked=False: `encode` skips cantools' range checks (half its cost), for senders whose
+    def __init__(self, path: Path | None = None, checked: bool = True):
+        """path: the CAN database (default mocap_edge.resources.can_database()). checked=False: `encode` skips cantools' range checks (half its cost), for senders whose
         values are already in range (simulated nodes clip theirs as the firmware does)."""
-        self.db, self.checked = cantools.database.load_file(str(path)), checked
+        self.db, self.checked = cantools.database.load_file(str(path or resources.can_database())), checked
         self._by_base = {m.frame_id: m for m in self.db.messages}
 
     def decode(self, frame_id: int, data: bytes, extended: bool = False, remote: bool = False) -> NodeFrame:

@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 import onnxruntime as ort
 
+from mocap_edge import resources
 from mocap_edge.detect.base import Detector, Person
-from mocap_edge.detect.blazepose import MODELS, BlazePose
+from mocap_edge.detect.blazepose import BlazePose
 from mocap_edge.detect.openpose_json import box_size, largest_people
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import open_source
@@ -144,7 +145,7 @@ def _unoptimised_landmarker() -> object:
     options = ort.SessionOptions()
     options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_DISABLE_ALL
     options.intra_op_num_threads, options.inter_op_num_threads = 2, 1
-    session = ort.InferenceSession(str(MODELS / "pose_landmark_full.onnx"), options, providers=["CPUExecutionProvider"])
+    session = ort.InferenceSession(str(resources.models_dir("blazepose") / "pose_landmark_full.onnx"), options, providers=["CPUExecutionProvider"])
     name = session.get_inputs()[0].name
     return types.SimpleNamespace(run=lambda x, outputs=None: session.run(outputs, {name: x}))
 
