@@ -43,8 +43,8 @@ clean:
 
 lint:             ## formatting of the C++ code, static checks of the Python code, its rooms and sizes, options declared everywhere
 	clang-format --dry-run -Werror $$(git ls-files 'host/*.cc' 'host/*.h' 'edge/*.cc' 'edge/*.h')
-	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests firmware conftest.py
+	$(CURDIR)/.venv/bin/ruff check host/python edge/python tests firmware yocto/tests scripts/edge_dist.py conftest.py
 	$(CURDIR)/.venv/bin/lint-imports pyproject.toml
-	$(PY) scripts/check_sizes.py host edge firmware tests
+	$(PY) scripts/check_sizes.py host edge firmware tests yocto
 	@test -f host/python/mocap/_core*.so || { echo "run 'make build' first (the options check reads the bindings)"; exit 1; }
 	$(PY) -m pytest -q host/python/tests/test_options_fields.py host/python/tests/test_session.py

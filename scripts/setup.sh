@@ -33,6 +33,9 @@ DEBIAN_PACKAGES+=(
   qemu-system-x86 busybox-static udev can-utils i2c-tools libcamera-tools libcamera-ipa
   "linux-headers-$VM_KERNEL" linux-source-6.1
 )
+# The Yocto layer's tests (yocto/tests): systemd-analyze checks the boxes' units in a root that
+# has linuxptp's ptp4l@.service, which they start after.
+DEBIAN_PACKAGES+=(systemd linuxptp)
 
 missing=()
 for p in "${DEBIAN_PACKAGES[@]}"; do

@@ -1,0 +1,54 @@
+# nooelint: oelint.var.mandatoryvar.SRC_URI,oelint.var.mandatoryvar.HOMEPAGE,oelint.var.suggestedvar.BUGTRACKER,oelint.var.bbclassextend - this repository's own source (mocap-source.inc); it has no public home page or tracker yet; it runs on the boxes only
+SUMMARY = "systemd services of the mocap edge boxes"
+DESCRIPTION = "The camera box (mocap-camera@.service, one instance per camera of the board), \
+               the IMU hub (mocap-imu-hub.service, can0 by systemd-networkd), the wait for the \
+               PTP clock that both start after, the mocap user and its devices, and example \
+               settings for /data/mocap (edge/systemd)."
+LICENSE = "Apache-2.0"
+LIC_FILES_CHKSUM = "file://LICENSE;md5=3b83ef96387f14655fc854ddc3c6bd57"
+
+require recipes-mocap/mocap-source.inc
+
+inherit allarch systemd useradd
+
+PACKAGES = "${PN}-clock ${PN}-camera ${PN}-hub"
+
+USERADD_PACKAGES = "${PN}-clock"
+GROUPADD_PARAM:${PN}-clock = "-r gpio; -r i2c"
+USERADD_PARAM:${PN}-clock = "-r -d /data/mocap -s /bin/false -G video,gpio,i2c -U mocap"
+
+SYSTEMD_PACKAGES = "${PN}-clock ${PN}-camera ${PN}-hub"
+SYSTEMD_SERVICE:${PN}-clock = "mocap-clock-sync.service"
+SYSTEMD_SERVICE:${PN}-camera = "mocap-camera@.service"
+SYSTEMD_SERVICE:${PN}-hub = "mocap-imu-hub.service"
+
+do_configure[noexec] = "1"
+do_compile[noexec] = "1"
+
+do_install() {
+    install -d ${D}${systemd_system_unitdir} ${D}${bindir} ${D}${sysconfdir}/systemd/network \
+        ${D}${sysconfdir}/udev/rules.d ${D}${nonarch_libdir}/tmpfiles.d \
+        ${D}${datadir}/mocap-edge/examples
+    install -m 0644 ${S}/edge/systemd/mocap-camera@.service ${S}/edge/systemd/mocap-imu-hub.service \
+        ${S}/edge/systemd/mocap-clock-sync.service ${D}${systemd_system_unitdir}/
+    install -m 0755 ${S}/edge/systemd/mocap-wait-clock ${D}${bindir}/
+    install -m 0644 ${S}/edge/systemd/80-mocap-can0.network ${D}${sysconfdir}/systemd/network/
+    install -m 0644 ${S}/edge/systemd/99-mocap-devices.rules ${D}${sysconfdir}/udev/rules.d/
+    install -m 0644 ${S}/edge/systemd/mocap-edge.tmpfiles ${D}${nonarch_libdir}/tmpfiles.d/mocap-edge.conf
+    install -m 0644 ${S}/edge/systemd/examples/camera@0.conf ${S}/edge/systemd/examples/imu-hub.conf \
+        ${S}/edge/systemd/examples/hub.toml ${D}${datadir}/mocap-edge/examples/
+}
+
+FILES:${PN}-clock += "\
+    ${bindir}/mocap-wait-clock \
+    ${datadir}/mocap-edge/examples \
+    ${nonarch_libdir}/tmpfiles.d \
+    ${sysconfdir}/udev/rules.d \
+    ${systemd_system_unitdir}/mocap-clock-sync.service \
+"
+FILES:${PN}-camera += "${systemd_system_unitdir}/mocap-camera@.service"
+FILES:${PN}-hub += "${sysconfdir}/systemd/network ${systemd_system_unitdir}/mocap-imu-hub.service"
+
+RDEPENDS:${PN}-clock += "linuxptp"
+RDEPENDS:${PN}-camera += "${PN}-clock python3-mocap-edge"
+RDEPENDS:${PN}-hub += "${PN}-clock python3-mocap-edge"

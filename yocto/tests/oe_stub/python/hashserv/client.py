@@ -1,0 +1,1 @@
+"""See the package docstring: nothing here is called."""
