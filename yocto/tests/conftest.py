@@ -9,17 +9,12 @@ import os
 import shutil
 import subprocess
 import sys
-import sysconfig
 from pathlib import Path
 
 import pytest
 
 import layer_parse
-
-REPO = layer_parse.REPO
-sys.path.insert(0, str(REPO / "scripts"))
-
-import edge_dist  # noqa: E402
+from install_tree import edge_dist
 
 HOST_UNITS = Path("/lib/systemd/system")
 
@@ -49,8 +44,3 @@ def image_root(tmp_path_factory, edge_wheel) -> Path:
     assert result.returncode == 0, result.stderr
     return root
 
-
-def site_packages(root: Path) -> Path:
-    """Where pip put the edge's packages under root (this interpreter's layout, prefix /usr)."""
-    rel = Path(sysconfig.get_path("purelib", vars={"base": "/usr"})).relative_to("/")
-    return root / rel

@@ -11,10 +11,7 @@ import importlib.metadata
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(REPO / "scripts"))
-
-import edge_dist  # noqa: E402
+from install_tree import edge_dist
 
 DYNAMIC = ("import_module", "require_module")  # importlib.import_module("x"), sources.base.require_module("x", ...)
 PROJECT = ("mocap", "mocap_edge")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import edge_dist, site_packages
+from install_tree import edge_dist, site_packages
 
 REPO = edge_dist.REPO
 

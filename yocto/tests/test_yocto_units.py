@@ -17,7 +17,7 @@ from mocap_edge.hub import bus_budget
 from mocap_edge.hub.config import HubConfig
 
 import layer_parse
-from conftest import edge_dist
+from install_tree import edge_dist
 
 SYSTEMD = layer_parse.REPO / "edge" / "systemd"
 EXAMPLES = SYSTEMD / "examples"

@@ -28,6 +28,7 @@ from mocap_edge.detect.base import Detector, open_detector
 from mocap_edge.errors import EdgeError, SourceError, TriggerError
 from mocap_edge.hub import command as hub_command
 from mocap_edge.sources.base import open_source
+from mocap_edge.supervisor import Supervisor
 from mocap_edge.trigger import GpiodTrigger, TriggerPairing
 
 Span = tuple[float, float]  # from_s, to_s of the take
@@ -124,22 +125,25 @@ def main(argv: list[str] | None = None) -> int:
     a = parse_arguments(argv)
     if a.start_ns is None:
         a.start_ns = time.time_ns()
+    supervisor = Supervisor()  # systemd's READY and watchdog, where systemd runs the box
     try:
         if a.role == "imu-hub":
-            return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration, _keys(a))
+            return hub_command.hub(a.can, a.i2c, a.config, a.bind, a.duration, _keys(a), supervisor)
         if a.role == "sim-nodes":
             unplugged = (a.stop_sensor, *a.stop) if a.stop_sensor and a.stop else None
             return hub_command.sim_nodes(a.streams, a.config, a.port, a.start_ns, a.seed, unplugged)
-        return _camera(a)
+        return _camera(a, supervisor)
     except EdgeError as e:
         print(f"mocap_edge: {e}", file=sys.stderr)
         return 1
+    finally:
+        supervisor.close()
 
 
-def _camera(a: argparse.Namespace) -> int:
+def _camera(a: argparse.Namespace, supervisor: Supervisor) -> int:
     counts = camera_box.BoxCounts()
     for span in _spans(a):
-        counts += _run_box(a, span)
+        counts += _run_box(a, span, supervisor)
     print(f"{a.camera}: {counts.frames} frames sent, {counts.detected} detected, {counts.people} people"
           + _refused(a), file=sys.stderr)
     return 0
@@ -156,7 +160,7 @@ def _spans(a: argparse.Namespace) -> list[Span | None]:
     return [(-math.inf, a.stop[0]), (a.stop[1], math.inf)]
 
 
-def _run_box(a: argparse.Namespace, span: Span | None) -> camera_box.BoxCounts:
+def _run_box(a: argparse.Namespace, span: Span | None, supervisor: Supervisor) -> camera_box.BoxCounts:
     """The box from its start (plugged in at the span's start) to the end of its source."""
     if span and span[0] > -math.inf:
         pacing.sleep_until(a.start_ns + round(span[0] * 1e9))
@@ -165,7 +169,8 @@ def _run_box(a: argparse.Namespace, span: Span | None) -> camera_box.BoxCounts:
         pairing = None
         if a.trigger:
             pairing = TriggerPairing(stack.enter_context(_trigger(a.trigger)), source.nominal_fps)
-        return camera_box.run(source, a.camera, a.bind, tuple(a.hs), pairing=pairing, realtime=a.realtime,
+        frames = supervisor.each(source)  # a turn per frame: READY at the first, then the watchdog
+        return camera_box.run(frames, a.camera, a.bind, tuple(a.hs), pairing=pairing, realtime=a.realtime,
                               model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000), keys=_keys(a))
 
 

@@ -28,6 +28,7 @@ from mocap_edge.hub.service import HubService, publisher
 from mocap_edge.hub.sim import socketcand
 from mocap_edge.hub.sim.studio import StudioNodes
 from mocap_edge.streams import Streams
+from mocap_edge.supervisor import Supervisor
 
 
 def _stop_on_signals():
@@ -38,8 +39,16 @@ def _stop_on_signals():
     return lambda: bool(stopping)
 
 
+def _turns(stop, supervisor: Supervisor):
+    """stop(), which the service asks once per cycle, reporting each cycle to the supervisor."""
+    def turn_and_ask() -> bool:
+        supervisor.turn()
+        return stop()
+    return turn_and_ask
+
+
 def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, duration_s: float = 0.0,
-        keys: ServerKeys | None = None) -> int:
+        keys: ServerKeys | None = None, supervisor: Supervisor | None = None) -> int:
     config = HubConfig.load(config_path)
     if config.names and not can_uri or config.i2c and not i2c_uri:
         raise EdgeError(f"{config_path} names {'CAN nodes' if config.names and not can_uri else 'I2C IMUs'}: "
@@ -47,7 +56,7 @@ def hub(can_uri: str | None, i2c_uri: str | None, config_path: str, bind: str, d
     local = _local_imus(config, i2c_uri) if config.i2c else []
     port = open_bus(can_uri) if can_uri else None
     publish, socket = publisher(bind, keys)
-    stop = _stop_on_signals()
+    stop = _turns(_stop_on_signals(), supervisor or Supervisor({}))
     service = HubService(port, Hub(config), publish, local=local,
                          reopen=(lambda: open_bus(can_uri)) if can_uri else None)
     try:
