@@ -120,7 +120,7 @@ def installed(layer, pn: str, tmp_path: Path) -> tuple[object, Path]:
 def shipped_by(d, image: Path) -> dict[str, list[str]]:
     """Installed file (relative to D) -> the packages whose FILES match it."""
     out = {}
-    for path in (p for p in image.rglob("*") if p.is_file()):
+    for path in (p for p in image.rglob("*") if p.is_file() or p.is_symlink()):
         rel = "/" + str(path.relative_to(image))
         out[rel] = [pkg for pkg in packages(d) for pattern in (d.getVar(f"FILES:{pkg}") or "").split()
                     if fnmatch.fnmatch(rel, pattern) or rel.startswith(pattern.rstrip("/") + "/")]
@@ -136,6 +136,8 @@ def test_services_are_installed_and_each_file_shipped_once(layer, tmp_path):
         for unit in d.getVar(f"SYSTEMD_SERVICE:{pkg}").split():
             assert files.get(f"{unit_dir}/{unit}") == [pkg], (pkg, unit)
     assert os.access(image / d.getVar("bindir").lstrip("/") / "mocap-wait-clock", os.X_OK)
+    second = image / d.getVar("sysconfdir").lstrip("/") / "systemd/system/multi-user.target.wants/mocap-camera@1.service"
+    assert os.readlink(second) == f"{unit_dir}/mocap-camera@.service"
     systemd_files = {p.name for p in (REPO / "edge" / "systemd").rglob("*") if p.is_file()}
     assert {Path(f).name for f in files} | {"mocap-edge.tmpfiles"} >= systemd_files
 
@@ -145,6 +147,20 @@ def test_the_models_are_installed_where_the_edge_looks(layer, tmp_path):
     models = image / d.getVar("datadir").lstrip("/") / "mocap-edge" / "models" / "blazepose"
     assert sorted(p.name for p in models.iterdir()) == ["LICENSE", "pose_detection.onnx", "pose_landmark_full.onnx"]
     assert all(len(pkgs) == 1 for pkgs in shipped_by(d, image).values())
+
+
+def test_the_image_gives_root_the_builders_ssh_keys_or_none(layer, tmp_path):
+    d = layer_parse.bb.data.createCopy(layer["mocap-edge-image"])
+    d.setVar("WORKDIR", str(tmp_path))
+    keys = tmp_path / "keys.pub"
+    keys.write_text("ssh-ed25519 AAAAC3NzaC1lZDI1NTE5AAAAIA test@studio\n")
+    authorized = Path(d.getVar("IMAGE_ROOTFS")) / d.getVar("ROOT_HOME").lstrip("/") / ".ssh" / "authorized_keys"
+    assert "mocap_authorized_keys" in d.getVar("ROOTFS_POSTPROCESS_COMMAND")
+    assert layer_parse.run_task(d, "mocap_authorized_keys", {"PATH": os.environ["PATH"]}).returncode == 0
+    assert not authorized.exists()
+    d.setVar("MOCAP_SSH_AUTHORIZED_KEYS", str(keys))
+    assert layer_parse.run_task(d, "mocap_authorized_keys", {"PATH": os.environ["PATH"]}).returncode == 0
+    assert authorized.read_text() == keys.read_text() and authorized.stat().st_mode & 0o777 == 0o600
 
 
 def test_a_syntax_error_fails_the_parse(tmp_path):

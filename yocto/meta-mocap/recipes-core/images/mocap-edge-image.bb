@@ -24,3 +24,16 @@ IMAGE_INSTALL += "\
     python3-mocap-edge \
     rauc \
 "
+
+# The builder's SSH public keys (a file of authorized_keys lines), given root on every box: how
+# boxes are configured and updated over the network (yocto/README.md). Unset: no SSH login.
+MOCAP_SSH_AUTHORIZED_KEYS ??= ""
+ROOTFS_POSTPROCESS_COMMAND += "mocap_authorized_keys"
+mocap_authorized_keys[doc] = "Installs MOCAP_SSH_AUTHORIZED_KEYS as root's authorized_keys"
+
+mocap_authorized_keys() {
+    if [ -n "${MOCAP_SSH_AUTHORIZED_KEYS}" ]; then
+        install -d -m 0700 ${IMAGE_ROOTFS}${ROOT_HOME}/.ssh
+        install -m 0600 ${MOCAP_SSH_AUTHORIZED_KEYS} ${IMAGE_ROOTFS}${ROOT_HOME}/.ssh/authorized_keys
+    fi
+}

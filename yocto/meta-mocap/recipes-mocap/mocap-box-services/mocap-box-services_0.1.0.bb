@@ -37,6 +37,11 @@ do_install() {
     install -m 0644 ${S}/edge/systemd/mocap-edge.tmpfiles ${D}${nonarch_libdir}/tmpfiles.d/mocap-edge.conf
     install -m 0644 ${S}/edge/systemd/examples/camera@0.conf ${S}/edge/systemd/examples/imu-hub.conf \
         ${S}/edge/systemd/examples/hub.toml ${D}${datadir}/mocap-edge/examples/
+    # Camera 1 as well as camera 0 (the unit's default instance): a board with two camera
+    # ports runs both; either starts only once its settings are on /data.
+    install -d ${D}${sysconfdir}/systemd/system/multi-user.target.wants
+    ln -sf ${systemd_system_unitdir}/mocap-camera@.service \
+        ${D}${sysconfdir}/systemd/system/multi-user.target.wants/mocap-camera@1.service
 }
 
 FILES:${PN}-clock += "\
@@ -46,7 +51,7 @@ FILES:${PN}-clock += "\
     ${sysconfdir}/udev/rules.d \
     ${systemd_system_unitdir}/mocap-clock-sync.service \
 "
-FILES:${PN}-camera += "${systemd_system_unitdir}/mocap-camera@.service"
+FILES:${PN}-camera += "${sysconfdir}/systemd/system ${systemd_system_unitdir}/mocap-camera@.service"
 FILES:${PN}-hub += "${sysconfdir}/systemd/network ${systemd_system_unitdir}/mocap-imu-hub.service"
 
 RDEPENDS:${PN}-clock += "linuxptp"
