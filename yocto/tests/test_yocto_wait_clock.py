@@ -3,6 +3,7 @@ for linuxptp's pmc that answers what ptp4l would, one answer per call from a scr
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -84,3 +85,36 @@ def test_the_grandmaster_waits_for_its_port_to_be_master(tmp_path):
 def test_a_bad_argument_is_refused(tmp_path, args):
     result = wait_clock(fake_pmc(tmp_path, [STATUS.format(offset=0, gm="true")]), *args)
     assert result.returncode == 2 and "mocap-wait-clock:" in result.stderr
+
+
+REAL_PTP = pytest.mark.skipif(not shutil.which("ptp4l") or not shutil.which("pmc") or os.geteuid() != 0,
+                              reason="linuxptp (make setup) and root (PTP's ports 319 and 320) are needed")
+SYSTEMD = layer_parse.REPO / "edge" / "systemd"
+
+
+@REAL_PTP
+@pytest.mark.parametrize("conf", ["ptp4l-box.conf", "ptp4l-grandmaster.conf"])
+def test_ptp4l_reads_the_boxes_settings(tmp_path, conf):
+    """This machine's linuxptp (Debian's 3.1; the image has 4.1, which reads these option names too)."""
+    out = subprocess.run(["timeout", "2", "ptp4l", "-f", str(SYSTEMD / conf), "-i", "lo", "-m",
+                          "--uds_address", str(tmp_path / "ptp4l")], capture_output=True, text=True, timeout=30)
+    assert "INITIALIZING to LISTENING" in out.stdout + out.stderr, out.stdout + out.stderr
+
+
+@REAL_PTP
+def test_the_grandmaster_gate_with_a_real_ptp4l(tmp_path):
+    """ptp4l with the grandmaster's settings on the loopback interface takes the grandmaster role
+    once no other clock announces itself; the gate, asking the real pmc, opens then."""
+    uds = tmp_path / "ptp4l"
+    ptp4l = subprocess.Popen(["ptp4l", "-f", str(SYSTEMD / "ptp4l-grandmaster.conf"), "-i", "lo", "-m",
+                              "--uds_address", str(uds)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        pmc = tmp_path / "pmc"
+        pmc.write_text(f'#!/bin/sh\nexec {shutil.which("pmc")} -s {uds} "$@"\n')
+        pmc.chmod(0o755)
+        result = wait_clock(pmc, "--grandmaster", "--stable", "2", "--interval", "1", "--timeout", "20")
+    finally:
+        ptp4l.terminate()
+        log, _ = ptp4l.communicate(timeout=10)
+    assert result.returncode == 0, result.stdout + result.stderr + log
+    assert "assuming the grand master role" in log
