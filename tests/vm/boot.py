@@ -12,15 +12,15 @@ log is printed; exit status that of the in-VM pytest).
 from __future__ import annotations
 
 import argparse
-import ctypes
 import dataclasses
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from mocap import processes
 
 if __package__:  # imported: tests/test_devices_vm.py's `from vm import boot`
     from . import build
@@ -28,7 +28,6 @@ else:  # run as a script: its folder is on sys.path
     import build
 
 QEMU = "qemu-system-x86_64"
-PR_SET_PDEATHSIG = 1  # prctl(2)
 TIMEOUT_S = 280.0  # the whole VM part stays under 5 minutes on 2 cores
 
 
@@ -74,7 +73,7 @@ def run(results: Path, timeout_s: float = TIMEOUT_S) -> VmRun:
     start = time.monotonic()
     with open(results / "qemu.log", "wb") as log:
         qemu = subprocess.Popen(command(results), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-                                preexec_fn=_die_with_parent)
+                                preexec_fn=processes.die_with_parent())
     timed_out = False
     try:
         qemu.wait(timeout=timeout_s)
@@ -86,13 +85,6 @@ def run(results: Path, timeout_s: float = TIMEOUT_S) -> VmRun:
         qemu.wait()
     status = (results / "status").read_text().strip() if (results / "status").is_file() else ""
     return VmRun(results, int(status) if status.lstrip("-").isdigit() else None, time.monotonic() - start, timed_out)
-
-
-def _die_with_parent() -> None:
-    """In QEMU's process before exec: killed when the process that started it ends, however
-    it ends (a SIGKILL or SIGTERM runs no `finally`)."""
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
 
 
 def main() -> int:

@@ -26,14 +26,12 @@ our solves got. The subprocess dies with this process (PR_SET_PDEATHSIG).
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import fcntl
 import hashlib
 import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -42,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core, paths
+from mocap import _core, paths, processes
 from mocap.eval import balancing_take
 from mocap.io.demo_data import fetch_trial
 from mocap.io.session import Session
@@ -65,26 +63,12 @@ class PeerUnavailable(Exception):
     """Pose2Sim's side cannot run here (its environment cannot be made, or it failed)."""
 
 
-def _tied_to(core: int | None):
-    """A subprocess preexec: pinned to `core`, killed when this process dies."""
-    parent = os.getpid()
-    prctl = ctypes.CDLL(None, use_errno=True).prctl  # looked up before the fork, not in the child
-
-    def setup() -> None:
-        if core is not None:
-            os.sched_setaffinity(0, {core})
-        prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
-        if os.getppid() != parent:  # the parent died before prctl
-            os._exit(1)
-    return setup
-
-
 def _run(command: list[str], timeout: float, core: int | None = None, what: str = "") -> str:
     """Runs a subprocess tied to this one; its stdout, or PeerUnavailable with its last words."""
     env = {**os.environ, **SINGLE_THREAD}
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=env,
-                              preexec_fn=_tied_to(core), stdin=subprocess.DEVNULL)
+                              preexec_fn=processes.die_with_parent(core), stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:
         raise PeerUnavailable(f"{what} did not finish in {timeout:.0f} s") from None
     except OSError as e:

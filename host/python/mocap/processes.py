@@ -1,0 +1,35 @@
+"""Child processes that end with their parent. A child is started with the kernel's parent-death
+signal (prctl PR_SET_PDEATHSIG, SIGKILL), so that a parent ended by any signal, SIGKILL
+included, when none of its own clean-up runs, leaves none of its children behind. The signal is
+sent when the *thread* that started the child ends: start children from a thread that outlives
+them (the main thread, as the demo and the benchmarks do). Linux only, as mocapd."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import subprocess
+from collections.abc import Callable, Sequence
+
+PR_SET_PDEATHSIG = 1  # prctl(2)
+
+
+def die_with_parent(core: int | None = None) -> Callable[[], None]:
+    """A preexec_fn for subprocess.Popen: the child is killed when this process ends; with
+    core, it is pinned to that CPU."""
+    parent = os.getpid()
+    prctl = ctypes.CDLL(None, use_errno=True).prctl  # looked up before the fork, not in the child
+
+    def setup() -> None:
+        if core is not None:
+            os.sched_setaffinity(0, {core})
+        prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL))
+        if os.getppid() != parent:  # the parent died before prctl
+            os._exit(1)
+    return setup
+
+
+def spawn(command: Sequence[str], **popen_options) -> subprocess.Popen:
+    """subprocess.Popen(command, **popen_options) of a child that ends with this process."""
+    return subprocess.Popen(command, preexec_fn=die_with_parent(), **popen_options)
