@@ -65,12 +65,20 @@ def test_licence_files_have_their_checksums(layer, pn):
         assert hashlib.md5((Path(d.getVar("S")) / path).read_bytes()).hexdigest() == md5, entry
 
 
-def test_local_source_files_exist(layer):
+def test_sources_are_local_files_or_checksummed_downloads(layer):
     for pn, d in layer.items():
         for uri in (d.getVar("SRC_URI") or "").split():
             if uri.startswith("file://"):
                 name = uri.removeprefix("file://").split(";")[0]
                 assert any((Path(p) / name).exists() for p in d.getVar("FILESPATH").split(":")), (pn, uri)
+            else:
+                assert uri.startswith("https://") and re.fullmatch(r"[0-9a-f]{64}", d.getVarFlag("SRC_URI", "sha256sum")), (pn, uri)
+
+
+def test_onnx_runtime_is_the_version_the_tests_run(layer):
+    pinned = re.search(r"^onnxruntime==(\S+)$", (REPO / "requirements.txt").read_text(), re.M)[1]
+    d = layer["python3-onnxruntime"]
+    assert d.getVar("PV") == pinned and f"onnxruntime-{pinned}-" in d.getVar("SRC_URI")
 
 
 def test_the_edge_packages_runtime_dependencies_are_what_its_code_imports(layer):

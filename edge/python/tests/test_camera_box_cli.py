@@ -20,14 +20,19 @@ def test_the_box_runs_on_the_fake_camera_and_reports_what_it_sent():
 
 
 def test_hardware_that_is_absent_is_named_not_traced():
-    for args in (["--trigger", "/dev/gpiochip9:3"], ["--trigger", "/dev/gpiochip0:x"]):
-        out = run("--source", "fake:", "--bind", "tcp://127.0.0.1:0", *args)
-        assert out.returncode == 1 and "Traceback" not in out.stderr and out.stderr.startswith("mocap_edge:")
-    for args in (["--source", "v4l2:/dev/video9"], ["--source", "fake:", "--model", "nosuch"],
-                 ["--source", "libcamera:9"], ["--source", "libcamera:0", "--size", "640by480"],
-                 ["--source", "fake:", "--size", "640x480"]):
+    for args in (["--source", "fake:", "--trigger", "/dev/gpiochip9:3"], ["--source", "v4l2:/dev/video9"],
+                 ["--source", "fake:", "--model", "nosuch"], ["--source", "libcamera:9"]):
         out = run(*args, "--bind", "tcp://127.0.0.1:0")
         assert out.returncode == 1 and "Traceback" not in out.stderr and out.stderr.startswith("mocap_edge:")
+
+
+def test_a_malformed_setting_is_a_usage_error_before_any_device_is_opened():
+    for args, said in ((["--source", "fake:", "--trigger", "/dev/gpiochip0:x"], "expected CHIP:LINE"),
+                       (["--source", "libcamera:0", "--size", "640by480"], "expected WIDTHxHEIGHT"),
+                       (["--source", "fake:", "--size", "640x480"], "--size is for a camera")):
+        out = run(*args, "--bind", "tcp://127.0.0.1:0")
+        assert out.returncode == 2 and "Traceback" not in out.stderr and "mocap_edge: error: " in out.stderr
+        assert said in out.stderr
 
 
 def test_mocap_detect_names_a_missing_video():
