@@ -111,6 +111,8 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
                "sim-nodes": ["streams", "config", "port"]}[a.role]
     if any(getattr(a, m) is None for m in missing):
         p.error(f"role {a.role} needs {', '.join('--' + m for m in missing)}")
+    if not a.camera.strip():  # an empty setting in a box's settings file
+        p.error("--camera is empty: the camera id the host's calibration knows this camera by")
     try:  # the specs read when the box starts its source and trigger
         if a.size:
             _size(a.size, a.source.partition(":")[0])
