@@ -17,7 +17,6 @@ from pathlib import Path
 
 import zmq
 
-from mocap import processes
 from mocap.demo import play
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
@@ -70,7 +69,7 @@ class LiveStudio:
     def restart(self, name: str) -> int:
         """Starts process `name` (again) with its command; the time it was started (ns)."""
         started = time.time_ns()
-        self.processes[name] = processes.spawn(self.commands[name], stdout=subprocess.DEVNULL)
+        self.processes[name] = subprocess.Popen(self.commands[name], stdout=subprocess.DEVNULL)
         return started
 
     def kill(self, name: str) -> int:

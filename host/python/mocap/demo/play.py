@@ -16,7 +16,6 @@ from pathlib import Path
 
 import zmq
 
-from mocap import processes
 from mocap import paths
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
@@ -58,7 +57,7 @@ def start_sim_nodes(studio: Studio, start_ns: int, unplugged: tuple | None = Non
                  "--config", str(studio.hub_config), "--port", "0", "--start-ns", str(start_ns)]
     if unplugged:
         nodes_cmd += ["--stop-sensor", unplugged[0], "--stop", *map(str, unplugged[1:])]
-    nodes = processes.spawn(nodes_cmd, stdout=subprocess.PIPE, text=True)
+    nodes = subprocess.Popen(nodes_cmd, stdout=subprocess.PIPE, text=True)
     listening = nodes.stdout.readline().split()  # "listening PORT"
     if len(listening) != 2:
         nodes.kill()
@@ -75,7 +74,7 @@ def imu_hub_command(studio: Studio, nodes_port: int) -> list[str]:
 def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> list[subprocess.Popen]:
     """The sensor nodes, then the hub reading them: the hub connects once the nodes listen."""
     nodes, port = start_sim_nodes(studio, start_ns, unplugged)
-    hub = processes.spawn(imu_hub_command(studio, port))
+    hub = subprocess.Popen(imu_hub_command(studio, port))
     return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
@@ -146,14 +145,14 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     duration = float(studio.frame_times[-1])
     start_ns = time.time_ns() + int(LEAD_S * 1e9)
     priority = ["--realtime", str(REALTIME_PRIORITY)] if realtime else []
-    host = processes.spawn([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
-                           "--quiet", *priority], stdout=subprocess.PIPE, text=True)
+    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
+                             "--quiet", *priority], stdout=subprocess.PIPE, text=True)
     commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
     if studio.calibrator:
         commands.append(_calibrator_command(studio, duration))
-    edge = [processes.spawn(cmd) for cmd in commands]
+    edge = [subprocess.Popen(cmd) for cmd in commands]
     edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
-    recording = processes.spawn(recorder_command(studio, record, duration)) if record else None
+    recording = subprocess.Popen(recorder_command(studio, record, duration)) if record else None
     keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:

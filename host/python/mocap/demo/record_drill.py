@@ -20,7 +20,6 @@ from pathlib import Path
 import zmq
 from mcap.reader import make_reader
 
-from mocap import processes
 from mocap.demo import studio as live_studio
 from mocap.errors import InputError
 from mocap.net import wire
@@ -71,8 +70,8 @@ def run(folder: Path, session: Path, messages: list[tuple[int, object]], sig: in
     with zmq.Context() as context, context.socket(zmq.XPUB) as publisher:
         publisher.setsockopt(zmq.LINGER, 0)
         port = publisher.bind_to_random_port("tcp://127.0.0.1")
-        process = processes.spawn([sys.executable, "-m", "mocap.cli", "record", "--connect", f"tcp://127.0.0.1:{port}",
-                                   "--session", str(session), "--out", str(path)], stdout=subprocess.DEVNULL)
+        process = subprocess.Popen([sys.executable, "-m", "mocap.cli", "record", "--connect", f"tcp://127.0.0.1:{port}",
+                                    "--session", str(session), "--out", str(path)], stdout=subprocess.DEVNULL)
         try:
             if not publisher.poll(TIMEOUT_S * 1000):
                 raise InputError(f"the recorder did not subscribe within {TIMEOUT_S:.0f} s")
