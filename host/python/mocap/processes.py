@@ -2,15 +2,14 @@
 signal (prctl PR_SET_PDEATHSIG, SIGKILL), so that a parent ended by any signal, SIGKILL
 included, when none of its own clean-up runs, leaves none of its children behind. The signal is
 sent when the *thread* that started the child ends: start children from a thread that outlives
-them (the main thread, as the demo and the benchmarks do). Linux only, as mocapd."""
+them (the main thread). Linux only, as mocapd."""
 
 from __future__ import annotations
 
 import ctypes
 import os
 import signal
-import subprocess
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 PR_SET_PDEATHSIG = 1  # prctl(2)
 
@@ -29,7 +28,3 @@ def die_with_parent(core: int | None = None) -> Callable[[], None]:
             os._exit(1)
     return setup
 
-
-def spawn(command: Sequence[str], **popen_options) -> subprocess.Popen:
-    """subprocess.Popen(command, **popen_options) of a child that ends with this process."""
-    return subprocess.Popen(command, preexec_fn=die_with_parent(), **popen_options)

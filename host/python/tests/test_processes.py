@@ -11,9 +11,9 @@ import time
 import pytest
 
 PARENT = """
-import sys, time
+import subprocess, sys, time
 from mocap import processes
-child = processes.spawn(["sleep", "60"])
+child = subprocess.Popen(["sleep", "60"], preexec_fn=processes.die_with_parent())
 print(child.pid, flush=True)
 time.sleep(60)
 """
