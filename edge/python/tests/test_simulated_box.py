@@ -24,7 +24,7 @@ from mocap_edge.detect.tracking import Tracker
 from mocap_edge.errors import SourceError
 from mocap_edge.sources import open_source
 from mocap_edge.sources.sim import MAX_FRAMES, frame_of, picture
-from mocap_edge.streams import Streams
+from mocap_edge.streams import CAMERA_FIELDS, Streams
 
 FPS = 60.0
 MS = 1_000_000
@@ -126,6 +126,29 @@ def test_a_frame_the_studio_did_not_detect_has_nobody_and_says_why(tmp_path, cap
     with caplog.at_level(logging.WARNING):
         assert model.detect(picture(2, (640, 480))) == [] and model.detect(picture(3, (640, 480))) == []
     assert len(caplog.records) == 1 and "--hs" in caplog.text
+
+
+def test_a_box_reads_its_cameras_part_of_a_long_take_and_maps_the_rest(tmp_path, monkeypatch) -> None:
+    """A camera box reads the file's camera fields and its own keypoints; the keypoints of
+    every camera and the IMUs' samples stay mapped from the file (an hour is 1.4 GB) until
+    used, with the same values; a compressed file is read whole, as before."""
+    monkeypatch.setattr("mocap_edge.streams.MAPPED_MIN_BYTES", 1024)
+    path = stream_file(tmp_path, 600)
+    whole = Streams.load(path)
+    part = Streams.load(path, read=CAMERA_FIELDS)
+    assert isinstance(part.keypoints, np.memmap) and not isinstance(whole.keypoints, np.memmap)
+    assert isinstance(part.frame_times_ns, np.ndarray) and not isinstance(part.frame_times_ns, np.memmap)
+    mine = part.camera("cam1")
+    assert not isinstance(mine.keypoints, np.memmap) and mine.keypoints.base is None  # its own memory
+    np.testing.assert_array_equal(mine.keypoints, whole.keypoints[:, 1])
+    np.testing.assert_array_equal(mine.frame_times_ns, whole.frame_times_ns)
+    np.testing.assert_array_equal(part.keypoints, whole.keypoints)
+    compressed = tmp_path / "compressed.npz"
+    with np.load(path) as z:
+        np.savez_compressed(compressed, **{k: z[k] for k in z.files})
+    again = Streams.load(compressed, read=CAMERA_FIELDS)
+    assert not isinstance(again.keypoints, np.memmap)
+    np.testing.assert_array_equal(again.camera("cam1").keypoints, mine.keypoints)
 
 
 def test_the_simulated_source_names_what_is_wrong(tmp_path) -> None:

@@ -27,7 +27,7 @@ from mocap_edge.hub.hub import Hub
 from mocap_edge.hub.service import HubService, publisher
 from mocap_edge.hub.sim import socketcand
 from mocap_edge.hub.sim.studio import StudioNodes
-from mocap_edge.streams import Streams
+from mocap_edge.streams import IMU_FIELDS, Streams
 from mocap_edge.supervisor import Supervisor
 
 
@@ -87,7 +87,7 @@ def _local_imus(config: HubConfig, uri: str) -> list[I2cImu]:
 def sim_nodes(streams_path: str, config_path: str, port: int, start_ns: int, seed: int = 0,
               unplugged: tuple[str, float, float] | None = None) -> int:
     """Serves the nodes on 127.0.0.1:port; prints `listening PORT` on stdout once it accepts."""
-    nodes = StudioNodes(Streams.load(streams_path), HubConfig.load(config_path), start_ns, time.time_ns(), seed,
+    nodes = StudioNodes(Streams.load(streams_path, read=IMU_FIELDS), HubConfig.load(config_path), start_ns, time.time_ns(), seed,
                         unplugged)
     stop = _stop_on_signals()
     with socketcand.listen(port) as listener:

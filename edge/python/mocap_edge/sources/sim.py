@@ -12,6 +12,7 @@ trigger pairing, publishing — runs on the simulated studio.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 import zipfile
@@ -22,7 +23,7 @@ import numpy as np
 from mocap_edge import pacing
 from mocap_edge.errors import SourceError
 from mocap_edge.sources.base import Frame, FrameSource
-from mocap_edge.streams import CameraStream, Streams
+from mocap_edge.streams import CAMERA_FIELDS, CameraStream, Streams
 
 MAX_FRAMES = 1 << 24  # frame numbers a picture's 24 bits of colour can code
 # A live source opened during the take skips the frames older than this (what a camera's
@@ -45,12 +46,23 @@ def frame_of(image: np.ndarray) -> int:
 
 
 def load_camera(streams: str, camera: str) -> CameraStream:
-    """One camera of a stream file; raises ValueError or OSError naming what is wrong."""
+    """One camera of a stream file (read once per process while the file is unchanged: the
+    box's source and detector share it, read-only); raises ValueError or OSError naming what
+    is wrong."""
+    stat = Path(streams).stat()
+    return _load_camera(streams, camera, stat.st_mtime_ns, stat.st_size)
+
+
+@functools.lru_cache(maxsize=4)
+def _load_camera(streams: str, camera: str, _mtime_ns: int, _size: int) -> CameraStream:
     try:
-        studio = Streams.load(Path(streams))
+        studio = Streams.load(Path(streams), read=CAMERA_FIELDS)
     except (KeyError, TypeError, ValueError, zipfile.BadZipFile) as e:
         raise ValueError(f"{streams} is not a stream file ({e})") from None
-    return studio.camera(camera)
+    stream = studio.camera(camera)
+    for shared in (stream.frame_times_ns, stream.keypoints, stream.detected):
+        shared.flags.writeable = False
+    return stream
 
 
 class SimulatedSource(FrameSource):
