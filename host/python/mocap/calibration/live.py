@@ -27,20 +27,20 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
-import ctypes
 import dataclasses
 import json
 import logging
 import os
-import signal
 import threading
 import time
+from collections.abc import Callable
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 import numpy as np
 import zmq
 
+from mocap import processes
 from mocap.calibration import informative, window
 from mocap.calibration.from_messages import Estimated, MotionWatch, estimate, write_session
 from mocap.io.session import Session
@@ -103,26 +103,21 @@ def _estimate(messages: list[tuple[int, str, bytes]], session: str, seconds: flo
     return estimate(messages, Path(session), seconds, "the live streams", quick=quick)
 
 
-PR_SET_PDEATHSIG = 1  # prctl(2): the signal a process gets when its parent dies
-
-
-def _worker_start(parent_pid: int) -> None:
-    """In the worker: low priority, and ended with its parent. A forked worker outlives a
-    killed parent otherwise (blocked on a pipe it holds both ends of). The kernel's
-    parent-death signal rather than spawn and a pipe only the parent holds: nothing has to
-    run in the worker (no watcher thread to read that pipe and exit, whatever the job is
-    doing), it holds for SIGKILL of the parent as for SIGTERM, and the pool keeps fork. It
-    is sent when the *thread* that forked the worker ends: WorkerPool is made and used by
-    one thread (follow's), which outlives the pool. Linux only, as mocapd."""
+def _worker_start(die_with_parent: Callable[[], None]) -> None:
+    """In the worker: low priority, and ended with its parent (mocap.processes). A forked
+    worker outlives a killed parent otherwise (blocked on a pipe it holds both ends of). The
+    kernel's parent-death signal rather than spawn and a pipe only the parent holds: nothing
+    has to run in the worker (no watcher thread to read that pipe and exit, whatever the job
+    is doing), it holds for SIGKILL of the parent as for SIGTERM, and the pool keeps fork. It
+    is sent when the *thread* that forked the worker ends: WorkerPool is made and used by one
+    thread (follow's), which outlives the pool."""
     os.nice(10)
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-    if os.getppid() != parent_pid:  # the parent died before the line above
-        os._exit(0)
+    die_with_parent()
 
 
 def _start_worker() -> concurrent.futures.ProcessPoolExecutor:
-    return concurrent.futures.ProcessPoolExecutor(1, initializer=_worker_start, initargs=(os.getpid(),))
+    return concurrent.futures.ProcessPoolExecutor(1, initializer=_worker_start,
+                                                 initargs=(processes.die_with_parent(),))
 
 
 class WorkerPool:
