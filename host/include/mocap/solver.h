@@ -140,7 +140,7 @@ class Solver {
                const SolveResult& before, QualityFlag flag, Eigen::VectorXd* x, SolveResult* result,
                Continuity* continuity) const;
   // The keypoints of a solution sit in the loss's tail: their mean cost is over
-  // max_keypoint_cost (mapped to the frame's loss: wider where no IMU orients the bones).
+  // max_keypoint_cost.
   bool InLossTail(const SolveResult& result, const CleanFrame& frame) const;
   // After a solve (pose its solution): the sensors it left out into *result, and, when it
   // tracked the keypoints, what they say of each sensor (slip_monitor.h).
