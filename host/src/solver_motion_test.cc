@@ -179,8 +179,7 @@ TEST(VideoOnlyLoss, KeypointsPullHarderOnlyWhereNoImuOrientsTheBones) {
   for (CameraObservation& camera : with_imus.cameras) {
     for (int k = 0; k < scene.layout.size(); ++k) {
       const int bone = scene.layout.sites[k].bone;
-      if (bone == hand || bone == scene.skeleton.BoneIndex("forearm_l"))
-        camera.keypoints[k].x += 30.0;
+      if (bone == hand || bone == scene.skeleton.BoneIndex("forearm_l")) camera.keypoints[k].x += 30.0;
     }
   }
   FrameObservations video_only = with_imus;

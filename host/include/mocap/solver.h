@@ -141,7 +141,7 @@ class Solver {
                Continuity* continuity) const;
   // The keypoints of a solution sit in the loss's tail: their mean cost is over
   // max_keypoint_cost.
-  bool InLossTail(const SolveResult& result, const CleanFrame& frame) const;
+  bool InLossTail(const SolveResult& result) const;
   // After a solve (pose its solution): the sensors it left out into *result, and, when it
   // tracked the keypoints, what they say of each sensor (slip_monitor.h).
   void WatchSensors(const CleanFrame& frame, const BodyPose& pose, bool tracked,

@@ -48,7 +48,7 @@ struct SolverOptions {
   // the bones, and the Cauchy loss at 5 px let the prior outvote what they say consistently
   // (the real Balancing take's pelvis came out 24 degrees off in yaw from the triangulated
   // hips, the left hip 9 cm away). 3: that take's distance 3.69 -> 2.88 cm; the simulated
-  // validation clips' video-only joint centres 2.09 -> 1.90 cm (docs/results_real.md).
+  // validation clips' video-only joint centres 2.09 -> 1.91 cm (docs/results_real.md).
   double video_only_position_loss_scale = 3.0;
   // E_A compares the measured acceleration with the second difference of the solved
   // positions, whose previous velocity is filtered (velocity_gain): 18 m/s^2 and the gain
@@ -110,10 +110,7 @@ struct SolverOptions {
   // Mean robust cost per keypoint (rho, in the position loss's units) above which the
   // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
   // tracked pose scores ~1.1, one carried off by the motion terms 4-8
-  // (measured on the evaluation clips). In the plain loss's units: on a frame solved with
-  // video_only_position_loss_scale the limit is the cost of the same residual under that
-  // loss (compared unmapped, every video-only frame of the Balancing take was re-acquired:
-  // 1.5 ms a frame instead of 0.28).
+  // (measured on the evaluation clips).
   double max_keypoint_cost = 2.5;
   // Warm start from a constant-velocity prediction of the two previous solutions (on
   // SO(3) per joint) instead of the previous solution alone.
