@@ -93,8 +93,6 @@ TEST(Options, EachFailingSolverConditionHasItsOwnMessage) {
       {"ground.loss_scale", [](SolverOptions* o) { o->ground.loss_scale = 0; }},
       {"floor_height", [](SolverOptions* o) { o->floor_height = -INFINITY; }},
       {"ground_unobserved_scale", [](SolverOptions* o) { o->ground_unobserved_scale = 0.5; }},
-      {"video_only_position_loss_scale",
-       [](SolverOptions* o) { o->video_only_position_loss_scale = 0.5; }},
       {"prediction_slack", [](SolverOptions* o) { o->prediction_slack = -0.5; }},
       {"max_keypoint_cost", [](SolverOptions* o) { o->max_keypoint_cost = 0; }},
       {"heading_time_constant", [](SolverOptions* o) { o->heading_time_constant = INFINITY; }},

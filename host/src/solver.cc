@@ -270,14 +270,6 @@ void Solver::AddImuTerms(const CleanFrame& frame, bool use_acceleration, FramePr
   }
 }
 
-bool Solver::OrientationObserved(const CleanFrame& frame) const {
-  if (!Active(options_.orientation)) return false;
-  for (size_t i = 0; i < imus_.size(); ++i) {
-    if (frame.imu_world[i] && !slips_.distrusted(static_cast<int>(i))) return true;
-  }
-  return false;
-}
-
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
   // The motion terms' prediction may shift where the keypoints can pull it (prediction_shift.h).
@@ -292,7 +284,6 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
   if (Active(options_.position)) {
     TermOptions position = options_.position;
     position.loss_scale *= position_loss_boost;
-    if (!OrientationObserved(frame)) position.loss_scale *= options_.video_only_position_loss_scale;
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }

@@ -155,8 +155,6 @@ class Solver {
   void AddMotionTerms(double timestamp, FrameProblem* problem) const;
   // E_PP and E_PD, when there is a prior and they are on.
   void AddPriorTerms(FrameProblem* problem) const;
-  // Whether an IMU orientation term (E_R) enters the frame's solve.
-  bool OrientationObserved(const CleanFrame& frame) const;
   // E_R of each trusted IMU with an orientation, and E_A (use_acceleration) of each with a
   // velocity and an acceleration; the distrusted sensors' orientations counted in *result.
   void AddImuTerms(const CleanFrame& frame, bool use_acceleration, FrameProblem* problem,
