@@ -25,7 +25,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--minutes", type=float, default=10.0, help="length of the soak's take (default 10)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--live-normal-priority", action="store_true",
-                   help="run the live benchmark's mocapd without --realtime (to see what real-time scheduling buys)")
+                   help="run the live and soak benchmarks' mocapd without --realtime (to see what real-time "
+                        "scheduling buys)")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
@@ -43,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
         for line in drill.bench():
             print(json.dumps({"bench": "drill", **line}), flush=True)
     if "soak" in args.only:  # the live studio for --minutes: latency windows, memory, descriptors
-        print(json.dumps(soak.bench(args.minutes)), flush=True)
+        print(json.dumps(soak.bench(args.minutes, realtime=not args.live_normal_priority)), flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)

@@ -34,11 +34,13 @@ class Arrived:
 class LiveStudio:
     """The studio's processes for a take starting `lead_s` after start(); `record`: a
     recorder records every stream into that file for `record_s` (default: the take and the
-    lead). Use as a context manager: every process it started ends with it."""
+    lead); `realtime`: mocapd asks for SCHED_FIFO at play.REALTIME_PRIORITY, as a deployed host.
+    Use as a context manager: every process it started ends with it."""
 
     def __init__(self, studio: Studio, lead_s: float = play.LEAD_S, record: Path | None = None,
-                 record_s: float | None = None, camera_args: dict[str, list[str]] | None = None) -> None:
-        self.studio, self.lead_s, self.record = studio, lead_s, record
+                 record_s: float | None = None, camera_args: dict[str, list[str]] | None = None,
+                 realtime: bool = False) -> None:
+        self.studio, self.lead_s, self.record, self.realtime = studio, lead_s, record, realtime
         self.record_s = record_s if record_s is not None else lead_s + float(studio.frame_times[-1]) + 2.0
         self.camera_args = camera_args or {}  # extra arguments of a camera's box
         self.processes: dict[str, subprocess.Popen] = {}
@@ -53,7 +55,8 @@ class LiveStudio:
     def start(self) -> None:
         """Starts mocapd, the boxes, the nodes and hub, the recorder and the watcher."""
         self.start_ns = time.time_ns() + int(self.lead_s * 1e9)
-        self.commands["mocapd"] = [str(play.MOCAPD), str(self.studio.session), "--quiet"]
+        priority = ["--realtime", str(play.REALTIME_PRIORITY)] if self.realtime else []
+        self.commands["mocapd"] = [str(play.MOCAPD), str(self.studio.session), "--quiet", *priority]
         for c, camera in enumerate(self.studio.camera_ids):
             self.commands[camera] = [*play.camera_box_command(self.studio, c, self.start_ns), "--from-open",
                                      *self.camera_args.get(camera, [])]
@@ -86,6 +89,13 @@ class LiveStudio:
         if self._nodes is not None and self._nodes.poll() is None:
             out["nodes"] = self._nodes.pid
         return out
+
+    def scheduled_realtime(self, name: str) -> bool | None:
+        """Whether process `name` runs under SCHED_FIFO now; None once it ended."""
+        try:
+            return os.sched_getscheduler(self.processes[name].pid) == os.SCHED_FIFO
+        except (KeyError, ProcessLookupError):
+            return None
 
     def take_s(self, t_ns: int) -> float:
         return (t_ns - self.start_ns) * 1e-9
