@@ -101,7 +101,7 @@ TEST(OptionsJson, TheKeysAreTheFieldsWithTermsAsTermDotField) {
   const std::vector<std::string> keys = SolverOptionKeys();
   const std::set<std::string> unique(keys.begin(), keys.end());
   EXPECT_EQ(unique.size(), keys.size());
-  EXPECT_EQ(keys.size(), 7 * 4 + 23u);  // seven terms of four fields, twenty-three others
+  EXPECT_EQ(keys.size(), 7 * 4 + 25u);  // seven terms of four fields, twenty-five others
   for (const char* key : {"position.loss_scale", "pca_deviation.enabled", "velocity_gain",
                           "motion.weight", "motion_velocity_gain", "ground.weight", "floor_height",
                           "prediction_slack", "accel_at_rest", "max_initial_iterations"})

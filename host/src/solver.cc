@@ -236,8 +236,9 @@ GroundContact Solver::Ground() const {
   return ground;
 }
 
-bool Solver::ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp) const {
-  const double w = MotionInformation(timestamp);
+bool Solver::ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp,
+                          const TermOptions& motion) const {
+  const double w = MotionInformation(timestamp, motion);
   if (!(w > 0.0)) return false;
   // The weakest direction's x = h / W, where the shift loosens the motion terms' pull on the
   // root by the factor 1 + kappa / (x (1 + x / r)) (prediction_shift.h).
@@ -272,18 +273,21 @@ void Solver::AddImuTerms(const CleanFrame& frame, bool use_acceleration, FramePr
 
 bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double position_loss_boost,
                       bool use_acceleration, Eigen::VectorXd* x, SolveResult* result) const {
+  const bool oriented = OrientationObserved(frame);
+  const TermOptions motion = MotionTerm(oriented);
   // The motion terms' prediction may shift where the keypoints can pull it (prediction_shift.h).
   Eigen::Matrix3d root_information = Eigen::Matrix3d::Zero();
   bool shift = use_acceleration && !frame.detections.empty() && options_.prediction_slack > 0;
   if (shift) {
     root_information = RootPositionInformation(skeleton_, x->data(), rig_, layout_,
                                                frame.detections, options_.position, Ground());
-    shift = ShiftMatters(root_information, frame.timestamp);
+    shift = ShiftMatters(root_information, frame.timestamp, motion);
   }
   FrameProblem problem(skeleton_, x->data(), shift);
   if (Active(options_.position)) {
     TermOptions position = options_.position;
     position.loss_scale *= position_loss_boost;
+    if (!oriented) position.loss_scale *= options_.video_only_position_loss_scale;
     result->counts.keypoints_behind_camera +=
         problem.AddPositionTerms(rig_, layout_, frame.detections, position);
   }
@@ -293,7 +297,7 @@ bool Solver::Optimise(const CleanFrame& frame, int max_iterations, double positi
     problem.AddGroundTerm(*ground.contacts, ground.floor, floor);
   }
   AddImuTerms(frame, use_acceleration, &problem, result);
-  if (use_acceleration) AddMotionTerms(frame.timestamp, &problem);
+  if (use_acceleration) AddMotionTerms(frame.timestamp, motion, &problem);
   problem.AddPredictionShiftPrior(root_information, options_.prediction_slack,
                                   kObservedInformationRatio, kMaxPredictionShift);
   AddPriorTerms(&problem);

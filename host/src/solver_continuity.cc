@@ -107,7 +107,7 @@ void Solver::Remember(const CleanFrame& frame, const BodyPose& pose, bool positi
   if (position_constrained) last_fix_ = frame.timestamp;
 }
 
-double Solver::MotionInformation(double timestamp) const {
+double Solver::MotionInformation(double timestamp, const TermOptions& motion) const {
   const double h1 = motion_->step, h2 = timestamp - motion_->timestamp;
   const double per_unit_weight = 4.0 / (h2 * h2 * (h1 + h2) * (h1 + h2));  // (2 / (h2 (h1 + h2)))^2
   int accelerations = 0, points = 0;
@@ -118,11 +118,17 @@ double Solver::MotionInformation(double timestamp) const {
   if (accelerations > 0 && options_.acceleration.enabled)
     return accelerations * options_.acceleration.weight * per_unit_weight;
   for (const auto& v : motion_->point_velocity) points += v.has_value();
-  return options_.motion.enabled ? points * options_.motion.weight * per_unit_weight : 0.0;
+  return motion.enabled ? points * motion.weight * per_unit_weight : 0.0;
 }
 
-void Solver::AddMotionTerms(double timestamp, FrameProblem* problem) const {
-  const TermOptions& term = options_.motion;
+TermOptions Solver::MotionTerm(bool oriented) const {
+  TermOptions motion = options_.motion;
+  if (!oriented) motion.weight *= options_.video_only_motion_weight_scale;
+  return motion;
+}
+
+void Solver::AddMotionTerms(double timestamp, const TermOptions& term,
+                            FrameProblem* problem) const {
   if (!term.enabled || !(term.weight > 0.0) || problem->count(kAccelerationTerm) > 0) return;
   for (size_t i = 0; i < motion_points_.size(); ++i) {
     if (!motion_->point_velocity[i]) continue;

@@ -1,5 +1,6 @@
-// The motion term E_M: frames no IMU measures acceleration in are smoothed by a constant-velocity
-// model; frames with E_A are left as they were; keypoints returning after a gap win.
+// Frames without IMUs. The motion term E_M: frames no IMU measures acceleration in are smoothed
+// by a constant-velocity model; frames with E_A are left as they were; keypoints returning after a
+// gap win. E_P's loss: wider on frames no IMU orientation constrains.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "mocap/kinematics.h"
 #include "mocap/solver.h"
 #include "synthetic_scene.h"
 
@@ -150,13 +152,81 @@ TEST(MotionTerm, KeypointsWinAfterAStopAndAfterAGap) {
     std::vector<double> errors;  // from the first frame seen after the turn
     for (size_t f = first; f < take.theta.size(); ++f)
       errors.push_back(testing::MaxJointError(skeleton, take.theta[f], take.truth[f]));
-    // Measured: in view 11.7 mm at most, 1.5 mm after 10 frames; after the gaps 0.4 and 0.1 mm
-    // on the first frame back (5.6 and 3.9 with a one-frame step), then 4.9 and 4.4 mm at most
-    // while the velocity filter turns, 0.9 and 0.8 mm after 10 frames.
+    // Measured (E_M at 32 m/s^2): in view 20.7 mm at most, ringing down to 1.9 mm over the
+    // last 8 frames; after the gaps 0.7 and 0.2 mm on the first frame back, then 12.2 and 10.2
+    // mm at most while the velocity filter turns, 2.9 and 3.8 mm over the last 8 frames. At 55
+    // m/s^2 (the default before the video-only Balancing take's jitter target): 10.4 mm, then
+    // 0.1; 4.3 and 3.9, then 0.4 — the smoothing's price at an instantaneous stop.
     if (gap > 0) EXPECT_LT(errors[0], 0.002) << "gap " << gap;
-    EXPECT_LT(*std::max_element(errors.begin(), errors.end()), gap == 0 ? 0.02 : 0.01) << gap;
-    EXPECT_LT(*std::max_element(errors.begin() + 10, errors.end()), 0.002) << "gap " << gap;
+    EXPECT_LT(*std::max_element(errors.begin(), errors.end()), gap == 0 ? 0.025 : 0.015) << gap;
+    ASSERT_GT(errors.size(), 8u);
+    EXPECT_LT(*std::max_element(errors.end() - 8, errors.end()), 0.005) << "gap " << gap;
   }
+}
+
+// E_M's weight is scaled (video_only_motion_weight_scale) only on frames no IMU orientation
+// enters: with orientation-only sensors (no accelerations, so E_M applies) the solve is the
+// same whatever the scale, as a stronger E_M lagged a smooth motion by 2-4 mm there.
+TEST(VideoOnlyMotion, TheWeightScaleActsOnlyWhereNoImuOrientsTheBones) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(6);
+  const auto pose_at = Swinging(&rng);
+  const PosePrior prior = testing::PriorThrough({pose_at(0), pose_at(1)}, 40, &rng);
+  auto last_pose = [&](bool imus, double scale) {
+    SolverOptions options;
+    options.video_only_motion_weight_scale = scale;
+    auto solver = testing::MakeSolver(scene, prior, options);
+    SolveResult r;
+    for (int f = 0; f < 30; ++f) {
+      FrameObservations obs = testing::Render(scene, pose_at(f / kRate), f / kRate);
+      if (!imus) obs.imus.clear();
+      r = solver->Solve(obs);
+      EXPECT_EQ(r.counts.accelerations_used, 0) << f;
+      if (f >= 3) EXPECT_GT(r.costs.motion, 0.0) << f;
+    }
+    return r.theta;
+  };
+  EXPECT_EQ(last_pose(true, 1.0), last_pose(true, 4.0));
+  EXPECT_GT((last_pose(false, 1.0) - last_pose(false, 4.0)).norm(), 1e-6);
+}
+
+// The left arm's keypoints all 30 px to the right of where the truth projects (a detector that
+// places a limb consistently off, as real detectors do beside the prior's idea of the pose):
+// on a frame without IMU orientations the wider loss (video_only_position_loss_scale) lets
+// them move the arm further than the plain Cauchy loss, which treats them as outliers; on a
+// frame with IMUs the option does nothing.
+TEST(VideoOnlyLoss, KeypointsPullHarderOnlyWhereNoImuOrientsTheBones) {
+  const testing::Scene scene = testing::MakeScene(4);
+  std::mt19937 rng(8);
+  const Eigen::VectorXd truth = testing::RandomPose(scene.skeleton, &rng, 0.3);
+  const PosePrior prior = testing::RandomPrior(60, 23, truth, &rng);
+  const int hand = scene.skeleton.BoneIndex("hand_l");
+  FrameObservations with_imus = testing::Render(scene, truth, 0.0);
+  for (CameraObservation& camera : with_imus.cameras) {
+    for (int k = 0; k < scene.layout.size(); ++k) {
+      const int bone = scene.layout.sites[k].bone;
+      if (bone == hand || bone == scene.skeleton.BoneIndex("forearm_l"))
+        camera.keypoints[k].x += 30.0;
+    }
+  }
+  FrameObservations video_only = with_imus;
+  video_only.imus.clear();
+  auto hand_moved = [&](const FrameObservations& frame, double scale) {
+    SolverOptions options = testing::ExactOptions();
+    options.video_only_position_loss_scale = scale;
+    options.pca_projection.weight = options.pca_deviation.weight = 1e4;  // a firm prior
+    auto solver = testing::MakeSolver(scene, prior, options);
+    solver->SetWarmStart(truth);
+    const SolveResult r = solver->Solve(frame);
+    EXPECT_EQ(r.status, SolveStatus::kOk) << r.message;
+    BodyPose solved, true_pose;
+    ForwardKinematics(scene.skeleton, r.theta.data(), &solved);
+    ForwardKinematics(scene.skeleton, truth.data(), &true_pose);
+    return (solved.position[hand] - true_pose.position[hand]).norm();
+  };
+  const double plain = hand_moved(video_only, 1.0), wide = hand_moved(video_only, 3.0);
+  EXPECT_GT(wide, 10.0 * plain);  // measured: 0.06 mm plain, 1.2 mm wide
+  EXPECT_NEAR(hand_moved(with_imus, 1.0), hand_moved(with_imus, 3.0), 1e-12);
 }
 
 }  // namespace

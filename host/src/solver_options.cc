@@ -28,6 +28,12 @@ bool SolverOptions::IsValid(std::string* error) const {
   });
   check.Expect(accel_at_rest.allFinite(), "accel_at_rest", "finite");
   check.Expect(!std::isinf(floor_height), "floor_height", floor_height, "finite, or NaN: unknown");
+  check.Expect(
+      video_only_position_loss_scale >= 1.0 && std::isfinite(video_only_position_loss_scale),
+      "video_only_position_loss_scale", video_only_position_loss_scale, "finite and >= 1");
+  check.Expect(
+      video_only_motion_weight_scale > 0.0 && std::isfinite(video_only_motion_weight_scale),
+      "video_only_motion_weight_scale", video_only_motion_weight_scale, "finite and > 0");
   check.Expect(ground_unobserved_scale >= 1.0 && std::isfinite(ground_unobserved_scale),
                "ground_unobserved_scale", ground_unobserved_scale, "finite and >= 1");
   check.Expect(min_confidence >= 0.0 && min_confidence < 1.0, "min_confidence", min_confidence,

@@ -1,6 +1,7 @@
 // The passes of one frame's solve: a coarse pass when (re)initialising, the fine pass, and,
 // when the keypoints cannot reach its solution, a re-acquisition from the warm start and a
 // re-initialisation from the frame's own observations.
+#include <cmath>
 #include <limits>
 
 #include "frame_validation.h"
@@ -32,10 +33,39 @@ bool Better(const SolveResult& candidate, const SolveResult& current) {
          MeanKeypointCost(candidate) <= kRecoveryGain * MeanKeypointCost(current);
 }
 
+// The cost under `t`'s loss with its scale times `scale` of a residual that costs `cost` under
+// `t`'s loss: max_keypoint_cost is set in the plain loss's units, and a frame no IMU orients
+// is solved with a wider loss (video_only_position_loss_scale), where a residual costs more.
+double CostAtScale(const TermOptions& t, double cost, double scale) {
+  const double b = t.loss_scale * t.loss_scale, a = b * scale * scale;
+  double s = cost;  // the squared weighted residual of that cost
+  switch (t.loss) {
+    case LossType::kTrivial:
+      return cost;
+    case LossType::kCauchy:
+      s = b * std::expm1(cost / b);
+      return a * std::log1p(s / a);
+    case LossType::kHuber:
+      s = cost <= b ? cost : (cost + b) * (cost + b) / (4.0 * b);
+      return s <= a ? s : 2.0 * std::sqrt(a * s) - a;
+  }
+  return cost;
+}
+
 }  // namespace
 
-bool Solver::InLossTail(const SolveResult& r) const {
-  return r.counts.keypoints_used > 0 && MeanKeypointCost(r) > options_.max_keypoint_cost;
+bool Solver::OrientationObserved(const CleanFrame& frame) const {
+  if (!options_.orientation.enabled || !(options_.orientation.weight > 0.0)) return false;
+  for (size_t i = 0; i < imus_.size(); ++i) {
+    if (frame.imu_world[i] && !slips_.distrusted(static_cast<int>(i))) return true;
+  }
+  return false;
+}
+
+bool Solver::InLossTail(const SolveResult& r, const CleanFrame& frame) const {
+  const double scale = OrientationObserved(frame) ? 1.0 : options_.video_only_position_loss_scale;
+  return r.counts.keypoints_used > 0 &&
+         MeanKeypointCost(r) > CostAtScale(options_.position, options_.max_keypoint_cost, scale);
 }
 
 bool Solver::CoarsePass(const CleanFrame& clean, int iterations, Eigen::VectorXd* x,
@@ -65,7 +95,7 @@ bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initial
   if (initialising) return true;
   // The tracked pose lost the keypoints (they sit in the loss's tail, outvoted by the motion
   // terms): re-acquire it from the keypoints, and forget the velocities that carried it off.
-  if (!reacquiring && InLossTail(*result)) {
+  if (!reacquiring && InLossTail(*result, clean)) {
     Recover(clean, warm_start, iterations, before_fine_pass, kLostAndReacquired, x, result,
             continuity);
   }
@@ -74,7 +104,7 @@ bool Solver::SolvePasses(const CleanFrame& clean, double timestamp, bool initial
   // pull back is not held, the frame is solved as a first frame is, from its own observations.
   const bool behind =
       result->counts.keypoints_used == 0 && result->counts.keypoints_behind_camera > 0;
-  if (behind || InLossTail(*result)) {
+  if (behind || InLossTail(*result, clean)) {
     const Eigen::VectorXd start =
         EstimateInitialPose(skeleton_, rig_, layout_, imus_, clean.detections, clean.imu_world)
             .theta;

@@ -140,8 +140,8 @@ class Solver {
                const SolveResult& before, QualityFlag flag, Eigen::VectorXd* x, SolveResult* result,
                Continuity* continuity) const;
   // The keypoints of a solution sit in the loss's tail: their mean cost is over
-  // max_keypoint_cost.
-  bool InLossTail(const SolveResult& result) const;
+  // max_keypoint_cost (mapped to the frame's loss: wider where no IMU orients the bones).
+  bool InLossTail(const SolveResult& result, const CleanFrame& frame) const;
   // After a solve (pose its solution): the sensors it left out into *result, and, when it
   // tracked the keypoints, what they say of each sensor (slip_monitor.h).
   void WatchSensors(const CleanFrame& frame, const BodyPose& pose, bool tracked,
@@ -150,11 +150,15 @@ class Solver {
   Eigen::VectorXd WarmStart(double timestamp) const;
   // Sets motion_points_ for the skeleton.
   void ChooseMotionPoints();
-  // E_M on each motion point with a velocity, when the frame at `timestamp` has no E_A term
-  // in *problem (the motion state is usable: AccelerationUsable).
-  void AddMotionTerms(double timestamp, FrameProblem* problem) const;
+  // E_M (`motion`: MotionTerm) on each motion point with a velocity, when the frame at
+  // `timestamp` has no E_A term in *problem (the motion state is usable: AccelerationUsable).
+  void AddMotionTerms(double timestamp, const TermOptions& motion, FrameProblem* problem) const;
+  // E_M's options on a frame with (oriented) or without an IMU orientation term.
+  TermOptions MotionTerm(bool oriented) const;
   // E_PP and E_PD, when there is a prior and they are on.
   void AddPriorTerms(FrameProblem* problem) const;
+  // Whether an IMU orientation term (E_R) enters the frame's solve.
+  bool OrientationObserved(const CleanFrame& frame) const;
   // E_R of each trusted IMU with an orientation, and E_A (use_acceleration) of each with a
   // velocity and an acceleration; the distrusted sensors' orientations counted in *result.
   void AddImuTerms(const CleanFrame& frame, bool use_acceleration, FrameProblem* problem,
@@ -162,11 +166,12 @@ class Solver {
   // E_G's contact sites, floor and options (no contacts when the floor is unknown or E_G off).
   GroundContact Ground() const;
   // The motion terms' information on the root's position at `timestamp` (prediction_shift.h's
-  // W): those E_A or E_M would add, each (2 / (h2 (h1 + h2)))^2 times its weight.
-  double MotionInformation(double timestamp) const;
+  // W): those E_A or E_M (`motion`) would add, each (2 / (h2 (h1 + h2)))^2 times its weight.
+  double MotionInformation(double timestamp, const TermOptions& motion) const;
   // Whether the prediction shift can change the frame: some direction the keypoints and ground
   // contact observe (root_information) less than the motion terms (prediction_shift.h).
-  bool ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp) const;
+  bool ShiftMatters(const Eigen::Matrix3d& root_information, double timestamp,
+                    const TermOptions& motion) const;
   // One Levenberg-Marquardt solve of the frame from *x, with the motion terms when
   // use_acceleration (E_A, or E_M where no IMU measures acceleration). False (status and
   // message set in *result) when nothing constrains the pose or the optimiser fails.

@@ -16,8 +16,9 @@ namespace mocap {
 
 enum class LossType { kTrivial, kCauchy, kHuber };
 
-// One cost term: E = rho(weight * |e|^2), rho scaled by loss_scale (rho(s) = a log(1 + s/a)
-// for Cauchy with a = loss_scale). Units of weight are the inverse square of the term's.
+// One cost term: E = rho(weight * |e|^2), rho scaled by loss_scale (Cauchy: Ceres'
+// CauchyLoss(a), rho(s) = a^2 log(1 + s/a^2), a = loss_scale). Units of weight are the inverse
+// square of the term's.
 struct TermOptions {
   bool enabled = true;
   double weight = 1.0;
@@ -42,6 +43,17 @@ struct SolverOptions {
   // the keypoints contradict is left out instead (slip_monitor.h).
   TermOptions orientation{true, 1.0 / (0.035 * 0.035), LossType::kTrivial, 4.0};  // 2 degrees
   TermOptions position{true, 1.0 / 25.0, LossType::kCauchy, 1.0};                 // 5 pixels
+  // On frames no IMU orientation constrains (a video-only take; every sensor lost or left
+  // out) the keypoints are all that orients the bones, and video noise is all E_M smooths:
+  // E_P's loss scale is multiplied by video_only_position_loss_scale (with the Cauchy loss at
+  // 5 px the prior outvoted what they said consistently: the real Balancing take's pelvis came
+  // out 24 degrees off in yaw from the triangulated hips, the left hip 9 cm away) and E_M's
+  // weight by video_only_motion_weight_scale (sigma 55 -> 32 m/s^2). 3 and 55/32 squared: that
+  // take's distance 3.69 -> 2.88 cm and jitter 14.4 -> 13.9 m/s^2 (docs/results_real.md). Frames
+  // with IMU orientations but no accelerations keep E_M at 55: stronger, a smooth synthetic motion
+  // lagged by 2-4 mm.
+  double video_only_position_loss_scale = 3.0;
+  double video_only_motion_weight_scale = (55.0 * 55.0) / (32.0 * 32.0);
   // E_A compares the measured acceleration with the second difference of the solved
   // positions, whose previous velocity is filtered (velocity_gain): 18 m/s^2 and the gain
   // 0.3 were tuned on the validation clips (docs/results.md, "Tuning").
@@ -49,12 +61,13 @@ struct SolverOptions {
   TermOptions pca_projection{true, 1.0 / (0.15 * 0.15), LossType::kTrivial, 1.0};  // 0.15 rad
   // E_M (residuals/motion_residual.h): on frames without E_A (no IMU measures acceleration),
   // each joint centre's acceleration costs as a measured one's error does, against a
-  // constant-velocity model, at 55 m/s^2 (stronger smooths more and lags more:
-  // docs/results_real.md, the Balancing take). Video noise makes per-frame accelerations larger
-  // than the motion's own (that take: 49 m/s^2 solved, 8 in Pose2Sim's filtered 3D), so no loss
-  // tells them apart by size; Cauchy bounds what a point pulls against the keypoints, so a fast
-  // real motion (a walk's heel strike) is followed rather than lagged: trivial, a simulated walk's
-  // video-only position error was 5.6 cm instead of 3.8 (mocap eval --omit R A).
+  // constant-velocity model, at 55 m/s^2 (32 on video-only frames, above; stronger smooths
+  // more and lags more: docs/results_real.md, the Balancing take). Video noise makes per-frame
+  // accelerations larger than the motion's own (that take: 49 m/s^2 solved, 8 in Pose2Sim's
+  // filtered 3D), so no loss tells them apart by size; Cauchy bounds what a point pulls against
+  // the keypoints, so a fast real motion (a walk's heel strike) is followed rather than lagged:
+  // trivial, a simulated walk's video-only position error was 5.6 cm instead of 3.8 (mocap eval
+  // --omit R A).
   TermOptions motion{true, 1.0 / (55.0 * 55.0), LossType::kCauchy, 1.0};
   // One standard deviation of the prior costs as much as a keypoint at its typical error;
   // weaker, the DOF the data leave free (toe, hand, clavicle twist) wander
@@ -101,7 +114,10 @@ struct SolverOptions {
   // Mean robust cost per keypoint (rho, in the position loss's units) above which the
   // tracked pose is taken to have lost the keypoints and is re-acquired from them; a
   // tracked pose scores ~1.1, one carried off by the motion terms 4-8
-  // (measured on the evaluation clips).
+  // (measured on the evaluation clips). In the plain loss's units: on a frame solved with
+  // video_only_position_loss_scale the limit is the cost of the same residual under that
+  // loss (compared unmapped, every video-only frame of the Balancing take was re-acquired:
+  // 1.5 ms a frame instead of 0.28).
   double max_keypoint_cost = 2.5;
   // Warm start from a constant-velocity prediction of the two previous solutions (on
   // SO(3) per joint) instead of the previous solution alone.
@@ -146,6 +162,8 @@ struct SolverOptions {
   static void VisitFields(Visit&& visit) {
     visit("orientation", &SolverOptions::orientation);
     visit("position", &SolverOptions::position);
+    visit("video_only_position_loss_scale", &SolverOptions::video_only_position_loss_scale);
+    visit("video_only_motion_weight_scale", &SolverOptions::video_only_motion_weight_scale);
     visit("acceleration", &SolverOptions::acceleration);
     visit("pca_projection", &SolverOptions::pca_projection);
     visit("pca_deviation", &SolverOptions::pca_deviation);

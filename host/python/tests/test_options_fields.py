@@ -36,7 +36,7 @@ def test_the_session_reader_and_the_wrapper_take_every_option_the_bindings_expor
     exported = _flattened(_core.SolverOptions, _core.SolverOptions())
     assert exported == set(_core.session_solver_keys()), "the session reader"
     assert exported == set(wrapper.option_names()), "the Python wrapper (mocap.model.solver)"
-    assert len(exported) == 51  # 7 terms x 4 fields + 23 others: update when a field is added
+    assert len(exported) == 53  # 7 terms x 4 fields + 25 others: update when a field is added
 
 
 def _changed(value):
