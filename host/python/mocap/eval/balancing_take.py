@@ -14,16 +14,10 @@ import numpy as np
 from mocap.eval import real_trial
 from mocap.io import retarget
 from mocap.io.demo_data import TRIAL
-from mocap.io.trc import read_trc
+from mocap.io.trc import POSE2SIM_MARKERS, read_trc
 from mocap.takes import solve as take_solve
 
-# joints.csv columns -> Pose2Sim's TRC markers (triangulated OpenPose keypoints). Our "head"
-# joint is the head bone's origin, the top of the neck: BODY_25B's UpperNeck ("Neck" in the
-# TRC), not its HeadTop ("Head").
-MARKERS = {"head": "Neck", "left_shoulder": "LShoulder", "right_shoulder": "RShoulder", "left_elbow": "LElbow",
-           "right_elbow": "RElbow", "left_wrist": "LWrist", "right_wrist": "RWrist", "left_hip": "LHip",
-           "right_hip": "RHip", "left_knee": "LKnee", "right_knee": "RKnee", "left_ankle": "LAnkle",
-           "right_ankle": "RAnkle"}
+MARKERS = POSE2SIM_MARKERS  # joints.csv columns -> Pose2Sim's TRC markers
 
 
 def write(trial: Path, folder: Path) -> Path:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap.errors import InputError
 from mocap.io._thetas import checked_thetas
 
 
@@ -39,3 +40,35 @@ def write_positions_csv(path: str | Path, bone_names: list[str], positions, time
         writer.writerow(header)
         for frame, (p, time_s) in enumerate(zip(positions, times)):
             writer.writerow([frame, f"{time_s:.6f}", *(f"{v:.6f}" for v in p.ravel())])
+
+
+def read_positions_csv(path: str | Path) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """(point names, positions (F, J, 3) m, times (F,) s) of a CSV this module or `mocap solve
+    --take` (joints.csv: <joint>_x, _y, _z) wrote. InputError naming the file and line for
+    anything else."""
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError, csv.Error) as e:
+        raise InputError(f"{path}: cannot read it as CSV: {e}") from None
+    if len(rows) < 2:
+        raise InputError(f"{path}: no frames (a header and one row per frame expected)")
+    header = rows[0]
+    points = [c[:-2] for c in header[2::3]]
+    expected = ["frame", "time_s"] + [f"{p}_{a}" for p in points for a in "xyz"]
+    if header != expected or not points or len(set(points)) != len(points):
+        raise InputError(f"{path}:1: expected frame, time_s, then <name>_x, <name>_y, <name>_z per point, "
+                         f"each name once; got {header[:8]}...")
+    values = np.empty((len(rows) - 1, len(header)))
+    for k, row in enumerate(rows[1:]):
+        try:
+            if len(row) != len(header):
+                raise ValueError
+            values[k] = [float(v) for v in row]
+        except ValueError:
+            raise InputError(f"{path}:{k + 2}: {len(row)} cells, expected {len(header)} numbers") from None
+    if not np.isfinite(values).all():
+        raise InputError(f"{path}:{2 + int(np.flatnonzero(~np.isfinite(values).all(axis=1))[0])}: not finite")
+    if (np.diff(values[:, 1]) <= 0).any():
+        raise InputError(f"{path}: time_s does not increase (line {int(np.argmax(np.diff(values[:, 1]) <= 0)) + 3})")
+    return points, values[:, 2:].reshape(len(values), len(points), 3), values[:, 1]
