@@ -19,7 +19,7 @@ from pathlib import Path
 
 from mocap.errors import InputError
 from mocap.io.session import FILES, Session
-from mocap.recording import mcap_scan
+from mocap.recording import foxglove, mcap_scan
 
 log = logging.getLogger(__name__)
 
@@ -116,8 +116,9 @@ class Recording:
         if warn and not self.integrity.intact:
             log.warning("%s: %s", path, self.integrity.describe())
 
-    def messages(self) -> Iterator[RecordedMessage]:
-        """Every intact message in log-time order (file order among equal times)."""
+    def messages(self, derived: bool = False) -> Iterator[RecordedMessage]:
+        """Every intact message in log-time order (file order among equal times); the views
+        derived from the PoseFrames for Foxglove (mocap.recording.foxglove) only when `derived`."""
         blocks = sorted(self.scan.blocks, key=lambda b: (b.first_ns, b.offset))
         pending: list = []  # heap of (log time, n, message)
         n = 0
@@ -126,7 +127,7 @@ class Recording:
                 yield heapq.heappop(pending)[2]
             for channel_id, sequence, log_time, publish_time, data in mcap_scan.block_messages(self._mm, block):
                 channel = self.channels.get(channel_id)
-                if channel is not None:
+                if channel is not None and (derived or channel.topic not in foxglove.TOPICS):
                     schema = self.scan.schemas.get(channel.schema_id)
                     message = RecordedMessage(log_time, channel.topic, schema.name if schema else "", data,
                                               publish_time, sequence, channel_id)

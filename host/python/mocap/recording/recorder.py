@@ -10,6 +10,10 @@ A recording has one channel per stream, its topic taken from the message:
 | Health | /health/<source> | time_ns |
 | Calibration | /calibration/<source> | valid_from_ns |
 
+Beside each PoseFrame, the skeleton in Foxglove's schemas on /skeleton/transforms and
+/skeleton/scene (mocap.recording.foxglove; its bones from the attached session's skeleton,
+else the default skeleton's where the names match), so that Foxglove shows the performer.
+
 log_time is the arrival time at the recorder (time.time_ns()). Messages are stored as the
 received bytes (message encoding "protobuf"), so fields unknown to this version survive.
 Each message type has one schema: encoding "protobuf", name = full type name, data = a
@@ -44,10 +48,12 @@ from mcap.data_stream import RecordBuilder
 from mcap.records import ChunkIndex
 from mcap.writer import Writer
 
+from mocap import paths
 from mocap.errors import InputError
 from mocap.io.session import FILES, Session
 from mocap.net import transport, wire
 from mocap.net.keys import ClientKeys
+from mocap.recording import foxglove
 
 log = logging.getLogger(__name__)
 
@@ -132,6 +138,7 @@ class Recorder:
         self._writer._Writer__chunk_indices = PackedChunkIndexes()
         self._writer.start(profile="protobuf", library="mocap recording")
         self._chunk_s, self._clock, self._chunk_opened = chunk_s, clock, None
+        self._parents = foxglove.skeleton_parents(paths.DEFAULT_SKELETON)  # the session's, once attached
         self._schema_ids: dict[str, int] = {}
         self._channel_ids: dict[str, int] = {}
         self._closed = False
@@ -150,11 +157,19 @@ class Recorder:
         self._writer.add_message(self._channel_id(topic, message.DESCRIPTOR), log_time=log_time_ns,
                                  data=bytes(frames[1]), publish_time=max(own_time_ns, 0))  # MCAP times are unsigned
         self.recorded[topic] += 1
+        if isinstance(message, wire.PoseFrame):
+            self._write_skeleton_views(message, log_time_ns)
         self._chunk_opened = self._clock() if self._chunk_opened is None else self._chunk_opened
         self.flush_if_due()
         if self._on_record is not None:
             self._on_record(topic, message)
         return True
+
+    def _write_skeleton_views(self, pose: wire.PoseFrame, log_time_ns: int) -> None:
+        """The PoseFrame's skeleton in Foxglove's schemas, at the PoseFrame's times."""
+        for topic, view in foxglove.skeleton_messages(pose, self._parents):
+            self._writer.add_message(self._channel_id(topic, view.DESCRIPTOR), log_time=log_time_ns,
+                                     data=view.SerializeToString(), publish_time=max(pose.capture_time_ns, 0))
 
     def flush_if_due(self) -> None:
         """Closes the open chunk if it has been open for chunk_s (call it while idle too)."""
@@ -176,6 +191,8 @@ class Recorder:
         "curve" keys are left out: they are the live streams', and the host's secret key file
         is never copied into a recording."""
         config = Session.load(session)
+        if (skeleton := config.file("skeleton")) is not None:
+            self._parents = foxglove.skeleton_parents(skeleton)
         renamed = {}
         for key in FILES:
             source = config.file(key)

@@ -28,7 +28,7 @@ def recover(source: str | Path, target: str | Path) -> Integrity:
                                       media_type=a.media_type, data=a.data)
         ids: dict[int, int] = {}  # the file's channel ids -> the new file's
         schemas: dict[int, int] = {0: 0}  # schema ids alike (0: no schema)
-        for m in recording.messages():
+        for m in recording.messages(derived=True):
             if m.channel_id not in ids:
                 ids[m.channel_id] = _register(writer, recording, m.channel_id, schemas)
             writer.add_message(ids[m.channel_id], log_time=m.log_time_ns, data=m.payload,
