@@ -105,3 +105,75 @@ def test_a_bad_joint_csv_is_refused_with_its_line(tmp_path, text, says):
 def test_export_of_a_folder_without_a_solve_says_so(tmp_path):
     out = _export(tmp_path, "--format", "c3d", "--out", tmp_path / "o.c3d")
     assert out.returncode != 0 and "joints.csv: no such file" in out.stderr and "Traceback" not in out.stderr
+
+
+def _read_glb(path):
+    """(the JSON, accessor index -> array) of a binary glTF, read from the spec's layout alone."""
+    import json
+    import struct
+    data = path.read_bytes()
+    magic, version, length = struct.unpack_from("<4sII", data)
+    assert magic == b"glTF" and version == 2 and length == len(data)
+    (json_length,) = struct.unpack_from("<I", data, 12)
+    doc = json.loads(data[20:20 + json_length])
+    (bin_length,) = struct.unpack_from("<I", data, 20 + json_length)
+    blob = data[28 + json_length: 28 + json_length + bin_length]
+    sizes = {"SCALAR": 1, "VEC3": 3, "VEC4": 4, "MAT4": 16}
+    types = {5126: np.float32, 5123: np.uint16}
+
+    def accessor(i):
+        a = doc["accessors"][i]
+        view = doc["bufferViews"][a["bufferView"]]
+        n = a["count"] * sizes[a["type"]]
+        return np.frombuffer(blob, types[a["componentType"]], n, view.get("byteOffset", 0)).reshape(a["count"], -1)
+    return doc, accessor
+
+
+def _quaternion_matrix(q):
+    x, y, z, w = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def test_a_gltf_export_animates_the_solved_skeleton(tmp_path):
+    from mocap.io.bvh_export import write_bvh
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    rng = np.random.default_rng(1)
+    thetas = np.zeros((12, skeleton.pose_dim))
+    thetas[:, :3] = [0.3, -0.2, 1.0] + np.linspace(0, 1, 12)[:, None] * [0.5, 0.1, 0.0]
+    thetas[:, 3:] = 0.4 * rng.normal(size=(1, skeleton.pose_dim - 3)) * np.linspace(0.2, 1, 12)[:, None]
+    write_bvh(tmp_path / "take.bvh", skeleton, thetas, 60.0)
+    out = _export(tmp_path / "take.bvh", "--format", "gltf", "--out", tmp_path / "take.glb")
+    assert out.returncode == 0, out.stderr
+    doc, accessor = _read_glb(tmp_path / "take.glb")
+    nodes, (animation,) = doc["nodes"], doc["animations"]
+    bones = {n["name"]: i for i, n in enumerate(nodes) if n["name"] in skeleton.bone_names}
+    assert len(bones) == skeleton.num_bones
+    parent = {c: i for i, n in enumerate(nodes) for c in n.get("children", [])}
+    tracks = {(c["target"]["node"], c["target"]["path"]): animation["samplers"][c["sampler"]]
+              for c in animation["channels"]}
+    times = accessor(tracks[(bones["pelvis"], "rotation")]["input"]).ravel()
+    np.testing.assert_allclose(times, np.arange(12) / 60.0, atol=1e-6)
+    for k, theta in enumerate(thetas):
+        world = {}
+        for i in sorted(bones.values()):  # parents first, as in the skeleton
+            node = nodes[i]
+            r = _quaternion_matrix(accessor(tracks[(i, "rotation")]["output"])[k].astype(float))
+            t = (accessor(tracks[(i, "translation")]["output"])[k] if (i, "translation") in tracks
+                 else np.array(node.get("translation", [0, 0, 0])))
+            if i in parent:
+                pr, pt = world[parent[i]]
+                world[i] = (pr @ r, pt + pr @ t)
+            else:
+                world[i] = (r, t)
+        _, expected = skeleton.forward_kinematics(theta)
+        got = np.array([world[bones[b]][1] for b in skeleton.bone_names]) @ retarget.P.T  # glTF's Y up -> ours
+        assert np.abs(got - expected).max() < 1e-3, k
+    (skin,) = doc["skins"]
+    inverse_bind = accessor(skin["inverseBindMatrices"]).reshape(-1, 4, 4).transpose(0, 2, 1)  # column-major
+    _, rest = skeleton.forward_kinematics(np.zeros(skeleton.pose_dim))
+    rest_of_joint = rest[[skeleton.bone_names.index(nodes[i]["name"]) for i in skin["joints"]]]
+    np.testing.assert_allclose(inverse_bind[:, :3, 3], -rest_of_joint @ retarget.P, atol=1e-6)
+    weights = accessor(doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"])
+    assert np.allclose(weights.sum(axis=1), 1.0) and skin["joints"] == sorted(bones.values())

@@ -49,29 +49,35 @@ class Motion:
             pos[i] = j.offset + (pos[j.parent] if j.parent >= 0 else 0.0)
         return pos
 
-    def global_transforms(self) -> tuple[np.ndarray, np.ndarray]:
-        """Global rotations (frames, joints, 3, 3) and positions (frames, joints, 3)."""
+    def local_transforms(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each joint's rotation (frames, joints, 3, 3) and translation (frames, joints, 3) in
+        its parent's frame: its channels composed in file order, its offset replaced by its
+        position channels."""
         n, nj = self.num_frames, len(self.joints)
-        rot = np.zeros((n, nj, 3, 3))
-        pos = np.zeros((n, nj, 3))
+        rot = np.broadcast_to(np.eye(3), (n, nj, 3, 3)).copy()
+        pos = np.broadcast_to(np.array([j.offset for j in self.joints]), (n, nj, 3)).copy()
         col = 0
         for i, j in enumerate(self.joints):
-            local_r = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-            local_t = np.broadcast_to(j.offset, (n, 3)).copy()
             for ch in j.channels:
                 v = self.values[:, col]
                 col += 1
                 axis = "XYZ".index(ch[0].upper())
                 if ch.lower().endswith("position"):
-                    local_t[:, axis] = v  # position channels replace the offset
+                    pos[:, i, axis] = v  # position channels replace the offset
                 else:
-                    local_r = local_r @ _axis_rotation(axis, np.radians(v))
+                    rot[:, i] = rot[:, i] @ _axis_rotation(axis, np.radians(v))
+        return rot, pos
+
+    def global_transforms(self) -> tuple[np.ndarray, np.ndarray]:
+        """Global rotations (frames, joints, 3, 3) and positions (frames, joints, 3)."""
+        local_r, local_t = self.local_transforms()
+        rot, pos = np.empty_like(local_r), np.empty_like(local_t)
+        for i, j in enumerate(self.joints):
             if j.parent < 0:
-                rot[:, i] = local_r
-                pos[:, i] = local_t
+                rot[:, i], pos[:, i] = local_r[:, i], local_t[:, i]
             else:
-                rot[:, i] = rot[:, j.parent] @ local_r
-                pos[:, i] = pos[:, j.parent] + np.einsum("nij,nj->ni", rot[:, j.parent], local_t)
+                rot[:, i] = rot[:, j.parent] @ local_r[:, i]
+                pos[:, i] = pos[:, j.parent] + np.einsum("nij,nj->ni", rot[:, j.parent], local_t[:, i])
         return rot, pos
 
 
