@@ -238,6 +238,27 @@ def test_a_session_calibrated_from_a_recording_captures_as_well_as_the_oracle(or
         from_recording.calibrate(bare, tmp_path / "none")
 
 
+def test_a_live_recording_shows_each_solved_pose_in_foxglove(oracle_take):
+    """The recorder writes, beside every PoseFrame mocapd published, the skeleton in Foxglove's
+    schemas: its transforms are the pose's joints, its lines the session skeleton's bones."""
+    from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms
+    from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+
+    studio, run, take = oracle_take
+    with reader.Recording(take) as recording:
+        messages = list(recording.messages(derived=True))
+    poses = {m.publish_time_ns: wire.decode([m.type_name.encode(), m.payload]) for m in messages if m.topic == "/pose"}
+    transforms = [(m.publish_time_ns, FrameTransforms.FromString(m.payload)) for m in messages
+                  if m.topic == "/skeleton/transforms"]
+    scenes = [SceneUpdate.FromString(m.payload) for m in messages if m.topic == "/skeleton/scene"]
+    assert len(poses) >= 0.98 * len(studio.frame_times) and len(transforms) == len(scenes) == len(poses)
+    for time_ns, view in transforms:
+        joints = {j.name: (j.px, j.py, j.pz) for j in poses[time_ns].joints}
+        assert {t.child_frame_id: (t.translation.x, t.translation.y, t.translation.z) for t in view.transforms} == joints
+    bones = studio.skeleton.num_bones - 1  # every bone but the root joins its parent
+    assert all(len(s.entities[0].lines[0].points) == 2 * bones for s in scenes)
+
+
 def test_without_imu_messages_the_calibration_is_the_skeleton_from_video(oracle_take):
     """What the live calibrator publishes when no IMU sends (a video-only studio, or a hub
     that is late): the skeleton and keypoint sites, and no IMU site — mocapd then keeps
