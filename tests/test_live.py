@@ -49,7 +49,10 @@ def test_every_frame_is_solved_and_faults_degrade_then_recover(studio, tmp_path)
     assert not cams[during].any() and not imus[during].any()
     assert cams[after].mean() > 0.95 and imus[after].all()  # the box reconnected, the IMU is back
     counts = np.array([len(p.cameras) for p in run.poses])
-    assert counts[0] == 8 and np.median(counts[after]) == 8  # no camera is left out at the start
+    # No camera is left out once it delivers: every frame from the take's 6th to the fault has all eight. (A box's
+    # first frame or two can reach the host past the synchroniser's 25 ms on a loaded 2-core machine: counted as
+    # late and dropped, and the box's next frames are used.)
+    assert (counts[(t > 5 / 60) & (t < 2.0)] == 8).all() and np.median(counts[after]) == 8, counts[:10]
     stale = [s for h in run.healths for s in h.streams if s.stream == "camera/cam3" and not s.active]
     assert stale, "Health never reported the unplugged camera inactive"
     # The calibrated session tracks the headings; Health reports each IMU's correction.
