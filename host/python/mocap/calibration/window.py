@@ -92,12 +92,9 @@ def solver_options(options: _core.SolverOptions | None = None) -> _core.SolverOp
 
 
 def _video_motion() -> _core.SolverOptions:
-    """The calibration's own solves, which the IMUs are fitted to: no E_M (the video's motion, not a model's lag),
-    and E_P's plain loss on their frames without IMUs too: the held pose's stillness and the mountings were tuned on
-    its rejection of the detector's outliers (a take's video-only frames are solved with the wider one)."""
+    """The calibration's own solves, the IMUs fitted to them: no E_M, E_P's plain loss (held poses were tuned on it)."""
     options = _core.SolverOptions()
-    options.motion.enabled = False
-    options.video_only_position_loss_scale = 1.0
+    options.motion.enabled, options.video_only_position_loss_scale = False, 1.0
     return options
 
 
