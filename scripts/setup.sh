@@ -33,6 +33,10 @@ DEBIAN_PACKAGES+=(
   qemu-system-x86 busybox-static udev can-utils i2c-tools libcamera-tools libcamera-ipa
   "linux-headers-$VM_KERNEL" linux-source-6.1
 )
+# The monitor page's test (tests/test_monitor_page.py) drives Debian's Chromium headless. Node.js and
+# npm install the page's three.js (below): from Debian unless the machine has them already.
+DEBIAN_PACKAGES+=(chromium)
+command -v npm >/dev/null 2>&1 || DEBIAN_PACKAGES+=(nodejs npm)
 # The Yocto layer's tests (yocto/tests): systemd-analyze checks the boxes' units in a root that
 # has linuxptp's ptp4l@.service, which they start after.
 DEBIAN_PACKAGES+=(systemd linuxptp)
@@ -68,5 +72,13 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
 .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+# The monitor page's browser modules (three.js), pinned by its package-lock.json, into its node_modules.
+web=host/python/mocap/monitor/web
+installed="require('./$web/node_modules/three/package.json').version"
+locked="require('./$web/package-lock.json').packages['node_modules/three'].version"
+if ! node -e "process.exit($installed === $locked ? 0 : 1)" 2>/dev/null; then
+  echo "setup: installing the monitor page's three.js (npm ci)"
+  npm ci --prefix "$web" --no-audit --no-fund --loglevel=error
+fi
 .venv/bin/python -m mocap.io.demo_data  # the demo's motion (PyPI pose2sim) into .cache/
 echo "setup: done"

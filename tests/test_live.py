@@ -142,8 +142,10 @@ def test_edge_command_line_explains_itself():
 
 def test_the_demo_command_writes_a_bvh_a_csv_and_a_report(tmp_path):
     out = subprocess.run([sys.executable, "-m", "mocap.cli", "demo", "--seconds", "3", "--out", str(tmp_path),
-                          "--record", str(tmp_path / "take.mcap")], capture_output=True, text=True, timeout=120)
+                          "--record", str(tmp_path / "take.mcap"), "--monitor", "127.0.0.1:0"],
+                         capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr[-2000:]
+    assert "mocap demo: the live view is at http://127.0.0.1:" in out.stderr, out.stderr[-2000:]
     report = (tmp_path / "report.md").read_text()
     assert "| frames dropped | 0 |" in report, report
     motion = bvh.load(tmp_path / "demo.bvh")

@@ -21,5 +21,5 @@ def test_pyproject_lists_every_subpackage():
 
 
 def test_every_room_has_a_docstring():
-    for room in ("net", "io", "model", "recording", "calibration", "sim", "takes", "eval", "demo", "cli", "imu_node"):
+    for room in ("net", "io", "model", "recording", "calibration", "sim", "takes", "eval", "demo", "cli", "imu_node", "monitor"):
         assert (importlib.import_module(f"mocap.{room}").__doc__ or "").strip(), room

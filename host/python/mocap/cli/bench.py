@@ -1,12 +1,13 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, edge, firmware, hub, peer, recording,
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, monitor, edge, firmware, hub, peer, recording,
 drill; soak only when asked: it runs for minutes)."""
 
 from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
-from mocap.demo import drill, record_drill, soak
+from mocap.demo import drill, monitor_bench, record_drill, soak
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, MocapError
 from mocap.eval import bench, edge_detector, peer
@@ -14,7 +15,7 @@ from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "edge", "firmware", "hub", "peer", "recording", "drill"]
+KINDS = ["solver", "live", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill"]
 ON_REQUEST = ["soak"]  # not in the default run: it lasts --minutes
 
 
@@ -27,6 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--live-normal-priority", action="store_true",
                    help="run the live and soak benchmarks' mocapd without --realtime (to see what real-time "
                         "scheduling buys)")
+    b.add_argument("--monitor-seconds", type=float, default=30.0,
+                   help="length of the take with the live view open (default 30)")
+    b.add_argument("--screenshot", default=None, metavar="PNG", help="the live view halfway through that take")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
@@ -38,6 +42,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
         print(json.dumps(live.bench(seconds=args.live_seconds, realtime=not args.live_normal_priority)), flush=True)
+    if "monitor" in args.only:  # the live benchmark with the live view open in headless Chromium
+        try:
+            line = monitor_bench.bench(args.monitor_seconds, realtime=not args.live_normal_priority,
+                                       screenshot=Path(args.screenshot) if args.screenshot else None)
+        except DataMissingError as e:
+            line = {"bench": "monitor", "skipped": str(e)}
+        print(json.dumps(line), flush=True)
     if "recording" in args.only:  # the recorder killed mid-take: what its file keeps
         print(json.dumps(record_drill.bench()), flush=True)
     if "drill" in args.only:  # camera box, IMU hub and mocapd killed, a box's clock stepped, mid-take

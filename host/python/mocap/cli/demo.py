@@ -26,6 +26,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     d.add_argument("--curve", action="store_true", help="every stream authenticated and encrypted with CURVE keys "
                    "(each device's key pair in OUT/session/keys; README, \"Securing the streams\"); off by default: "
                    "the simulated studio stays on loopback")
+    d.add_argument("--monitor", default="127.0.0.1:8080", metavar="[HOST:]PORT",
+                   help="serve the live view (`mocap monitor`) there during the take (default 127.0.0.1:8080: "
+                        "open http://127.0.0.1:8080/); 'off': none")
     d.set_defaults(func=run)
 
 
@@ -42,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     result = demo.run(out, args.seconds, vmc=args.vmc, seed=args.seed, record=args.record,
                       calibration=args.calibration, still_s=args.still_start, progress=_progress,
-                      curve=args.curve)
+                      curve=args.curve, monitor=None if args.monitor == "off" else args.monitor)
     print(file=sys.stderr)
     print((out / "report.md").read_text(), file=sys.stderr)
     return 0 if result["solved"] else 1
