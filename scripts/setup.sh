@@ -36,6 +36,8 @@ DEBIAN_PACKAGES+=(
 # The monitor page's test (tests/test_monitor_page.py) drives Debian's Chromium headless. Node.js and
 # npm install the page's three.js (below): from Debian unless the machine has them already.
 DEBIAN_PACKAGES+=(chromium)
+# The glTF export's test imports it with Blender's own importer, which needs numpy.
+DEBIAN_PACKAGES+=(blender python3-numpy)
 command -v npm >/dev/null 2>&1 || DEBIAN_PACKAGES+=(nodejs npm)
 # The Yocto layer's tests (yocto/tests): systemd-analyze checks the boxes' units in a root that
 # has linuxptp's ptp4l@.service, which they start after.
@@ -72,13 +74,13 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install -q --disable-pip-version-check -r requirements.txt
 .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
-# The monitor page's browser modules (three.js), pinned by its package-lock.json, into its node_modules.
-web=host/python/mocap/monitor/web
-installed="require('./$web/node_modules/three/package.json').version"
-locked="require('./$web/package-lock.json').packages['node_modules/three'].version"
-if ! node -e "process.exit($installed === $locked ? 0 : 1)" 2>/dev/null; then
-  echo "setup: installing the monitor page's three.js (npm ci)"
-  npm ci --prefix "$web" --no-audit --no-fund --loglevel=error
-fi
+# The npm packages, each folder's pinned by its package-lock.json: the monitor page's three.js, and
+# the readers the tests run with node (Khronos' glTF validator). Installed again when a lock changes.
+for folder in host/python/mocap/monitor/web tests/node; do
+  if [ ! -f "$folder/node_modules/.package-lock.json" ] || [ "$folder/package-lock.json" -nt "$folder/node_modules/.package-lock.json" ]; then
+    echo "setup: installing the npm packages of $folder (npm ci)"
+    npm ci --prefix "$folder" --no-audit --no-fund --loglevel=error
+  fi
+done
 .venv/bin/python -m mocap.io.demo_data  # the demo's motion (PyPI pose2sim) into .cache/
 echo "setup: done"
