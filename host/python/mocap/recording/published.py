@@ -1,0 +1,81 @@
+"""What mocapd published during a recorded take: the PoseFrames on /pose (the live solve, as the
+recorder received it) and the skeleton they were solved with — the latest calibration's recorded
+on /calibration/* (the live calibrator's), else the attached session's. `mocap export` writes a
+recorded take from them without solving it again."""
+
+from __future__ import annotations
+
+import dataclasses
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from mocap import _core
+from mocap.errors import InputError
+from mocap.io.session import Session
+from mocap.net import wire
+from mocap.recording import reader
+
+POSE_TOPIC = "/pose"
+
+
+@dataclasses.dataclass
+class Published:
+    poses: list  # wire.PoseFrame, in capture order, each frame once
+    skeleton: _core.Skeleton | None  # None: neither a calibration nor a session says it
+    integrity: reader.Integrity
+
+    def positions(self) -> np.ndarray:
+        """(F, J, 3) m: the joints as published, each frame with the calibration it was solved with."""
+        return np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in self.poses])
+
+    def times(self) -> np.ndarray:
+        """(F,) s from the first pose's capture."""
+        return np.array([p.capture_time_ns - self.poses[0].capture_time_ns for p in self.poses]) * 1e-9
+
+    def thetas(self) -> np.ndarray:
+        return np.array([list(p.theta) for p in self.poses])
+
+    def rate_hz(self) -> float:
+        """The take's frame rate, from the median interval between captures (60 for one frame)."""
+        if len(self.poses) < 2:
+            return 60.0
+        return float(1e9 / np.median(np.diff([p.capture_time_ns for p in self.poses])))
+
+
+def _decoded(message: reader.RecordedMessage):
+    try:
+        return wire.decode([message.type_name.encode(), message.payload])
+    except wire.WireError:
+        return None  # counted by the recorder when it was written; a damaged one is skipped here
+
+
+def read(path: str | Path) -> Published:
+    """The published poses of recording `path`; InputError when it has none."""
+    poses: dict[int, wire.PoseFrame] = {}
+    latest_skeleton: tuple[int, str] | None = None
+    with reader.Recording(path) as recording:
+        for message in recording.messages():
+            if message.topic == POSE_TOPIC and isinstance(pose := _decoded(message), wire.PoseFrame):
+                poses.setdefault(pose.capture_time_ns, pose)
+            elif message.topic.startswith("/calibration/") and isinstance(c := _decoded(message), wire.Calibration):
+                if c.skeleton_json and (latest_skeleton is None or c.valid_from_ns >= latest_skeleton[0]):
+                    latest_skeleton = (c.valid_from_ns, c.skeleton_json)
+        if not poses:
+            raise InputError(f"{path}: no solved poses ({POSE_TOPIC}) in this recording: record mocapd's output "
+                             "with the inputs, or solve the inputs first (`mocap solve --recording`)")
+        skeleton = _skeleton(recording, latest_skeleton)
+    ordered = [poses[t] for t in sorted(poses)]
+    return Published(ordered, skeleton, recording.integrity)
+
+
+def _skeleton(recording: reader.Recording, calibrated: tuple[int, str] | None) -> _core.Skeleton | None:
+    try:
+        if calibrated is not None:
+            return _core.Skeleton.from_json(calibrated[1])
+        with tempfile.TemporaryDirectory() as folder:
+            session = recording.session(folder)
+            return None if session is None else _core.Skeleton.load(str(Session.load(session).file("skeleton")))
+    except ValueError as e:
+        raise InputError(f"{recording.path}: its skeleton cannot be read ({e})") from None
