@@ -28,3 +28,26 @@ def die_with_parent(core: int | None = None) -> Callable[[], None]:
             os._exit(1)
     return setup
 
+
+
+def pin(pid: int, cores: set[int]) -> None:
+    """Every thread of process pid onto `cores` (threads it starts later inherit it); a process
+    that has ended is left alone."""
+    try:
+        tasks = os.listdir(f"/proc/{pid}/task")
+    except FileNotFoundError:
+        return
+    for tid in tasks:
+        try:
+            os.sched_setaffinity(int(tid), cores)
+        except ProcessLookupError:  # the thread ended meanwhile
+            pass
+
+
+def host_and_edge_cores() -> tuple[int, set[int]]:
+    """A machine's cores split as a deployed host would (systemd's CPUAffinity=): the last one
+    for mocapd alone, the others for everything else."""
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) < 2:
+        raise ValueError("pinning mocapd to a core of its own needs at least 2 cores")
+    return cores[-1], set(cores[:-1])

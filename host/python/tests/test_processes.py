@@ -1,4 +1,5 @@
-"""Children started by mocap.processes end with their parent, however the parent ends."""
+"""Children started by mocap.processes end with their parent, however the parent ends; a process
+pinned to cores has every thread there, and the threads it starts later."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ import sys
 import time
 
 import pytest
+
+from mocap import processes
 
 PARENT = """
 import subprocess, sys, time
@@ -47,3 +50,26 @@ def test_a_spawned_child_ends_with_its_parent(how):
         if os.path.exists(f"/proc/{child}"):
             os.kill(child, signal.SIGKILL)
             reaped_within(child, 5.0)
+
+
+def test_pin_moves_every_thread_of_a_process_and_its_later_threads():
+    host, edge = processes.host_and_edge_cores()
+    assert host not in edge and edge | {host} == os.sched_getaffinity(0)
+    code = ("import threading, time, os\n"
+            "threading.Thread(target=time.sleep, args=(30,), daemon=True).start()\n"
+            "print('started', flush=True); input()\n"
+            "t = threading.Thread(target=time.sleep, args=(30,), daemon=True); t.start()\n"
+            "print(sorted(os.sched_getaffinity(t.native_id)), flush=True); time.sleep(30)\n")
+    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "started"
+        processes.pin(child.pid, {host})
+        tasks = os.listdir(f"/proc/{child.pid}/task")
+        assert len(tasks) >= 2 and all(os.sched_getaffinity(int(t)) == {host} for t in tasks)
+        child.stdin.write("\n")
+        child.stdin.flush()
+        assert child.stdout.readline().strip() == str([host])  # a thread started after the pin
+    finally:
+        child.kill()
+        child.wait()
+    processes.pin(child.pid, {host})  # an ended process is left alone

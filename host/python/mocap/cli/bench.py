@@ -24,6 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--only", nargs="+", default=KINDS, choices=KINDS + ON_REQUEST,
                    help="benchmarks to run (default all but soak)")
     b.add_argument("--minutes", type=float, default=10.0, help="length of the soak's take (default 10)")
+    b.add_argument("--pin-host", action="store_true", help="soak: mocapd alone on the last core, the studio's other "
+                   "processes on the others (as systemd's CPUAffinity= on a deployed host)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
     b.add_argument("--live-normal-priority", action="store_true",
                    help="run the live and soak benchmarks' mocapd without --realtime (to see what real-time "
@@ -55,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
         for line in drill.bench():
             print(json.dumps({"bench": "drill", **line}), flush=True)
     if "soak" in args.only:  # the live studio for --minutes: latency windows, memory, descriptors
-        print(json.dumps(soak.bench(args.minutes, realtime=not args.live_normal_priority)), flush=True)
+        print(json.dumps(soak.bench(args.minutes, realtime=not args.live_normal_priority, pin_host=args.pin_host)),
+              flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import zmq
 
+from mocap import processes
 from mocap.demo import play
 from mocap.demo.studio import Studio
 from mocap.errors import InputError
@@ -39,8 +40,11 @@ class LiveStudio:
 
     def __init__(self, studio: Studio, lead_s: float = play.LEAD_S, record: Path | None = None,
                  record_s: float | None = None, camera_args: dict[str, list[str]] | None = None,
-                 realtime: bool = False) -> None:
+                 realtime: bool = False, pin_host: bool = False) -> None:
         self.studio, self.lead_s, self.record, self.realtime = studio, lead_s, record, realtime
+        # pin_host: mocapd alone on the last core, every other process (this one's threads started
+        # from then on too) on the others, as systemd's CPUAffinity= would on a deployed host
+        self.cores = processes.host_and_edge_cores() if pin_host else None
         self.record_s = record_s if record_s is not None else lead_s + float(studio.frame_times[-1]) + 2.0
         self.camera_args = camera_args or {}  # extra arguments of a camera's box
         self.processes: dict[str, subprocess.Popen] = {}
@@ -51,6 +55,7 @@ class LiveStudio:
         self._stopping = threading.Event()
         self._watcher: threading.Thread | None = None
         self._nodes: subprocess.Popen | None = None
+        self._caller_cores: set[int] | None = None
 
     def start(self) -> None:
         """Starts mocapd, the boxes, the nodes and hub, the recorder and the watcher."""
@@ -60,7 +65,12 @@ class LiveStudio:
         for c, camera in enumerate(self.studio.camera_ids):
             self.commands[camera] = [*play.camera_box_command(self.studio, c, self.start_ns), "--from-open",
                                      *self.camera_args.get(camera, [])]
+        if self.cores:
+            self._caller_cores = os.sched_getaffinity(0)  # given back at stop()
+            os.sched_setaffinity(0, self.cores[1])  # this thread, and the watcher it starts
         self._nodes, port = play.start_sim_nodes(self.studio, self.start_ns)
+        if self.cores:
+            processes.pin(self._nodes.pid, self.cores[1])
         self.commands["hub"] = play.imu_hub_command(self.studio, port)
         if self.record:
             self.commands["recorder"] = play.recorder_command(self.studio, self.record, self.record_s - 2.0)
@@ -72,7 +82,9 @@ class LiveStudio:
     def restart(self, name: str) -> int:
         """Starts process `name` (again) with its command; the time it was started (ns)."""
         started = time.time_ns()
-        self.processes[name] = subprocess.Popen(self.commands[name], stdout=subprocess.DEVNULL)
+        cores = None if self.cores is None else {self.cores[0]} if name == "mocapd" else self.cores[1]
+        self.processes[name] = subprocess.Popen(self.commands[name], stdout=subprocess.DEVNULL,
+                                                preexec_fn=(lambda: os.sched_setaffinity(0, cores)) if cores else None)
         return started
 
     def kill(self, name: str) -> int:
@@ -94,6 +106,13 @@ class LiveStudio:
         """Whether process `name` runs under SCHED_FIFO now; None once it ended."""
         try:
             return os.sched_getscheduler(self.processes[name].pid) == os.SCHED_FIFO
+        except (KeyError, ProcessLookupError):
+            return None
+
+    def cores_of(self, name: str) -> list[int] | None:
+        """The cores process `name` may run on now; None once it ended."""
+        try:
+            return sorted(os.sched_getaffinity(self.processes[name].pid))
         except (KeyError, ProcessLookupError):
             return None
 
@@ -156,6 +175,8 @@ class LiveStudio:
         self._stopping.set()
         if self._watcher is not None:
             self._watcher.join(timeout=STOP_TIMEOUT_S)
+        if self._caller_cores is not None:
+            os.sched_setaffinity(0, self._caller_cores)
 
     def __enter__(self) -> LiveStudio:
         try:

@@ -75,16 +75,17 @@ def latency_windows(take_s: np.ndarray, latency_ms: np.ndarray, window_s: float 
     return out
 
 
-def bench(minutes: float = 10.0, realtime: bool = True) -> dict:
+def bench(minutes: float = 10.0, realtime: bool = True, pin_host: bool = False) -> dict:
     """The `soak` benchmark line. realtime: mocapd under SCHED_FIFO, as the live benchmark and a
-    deployed host run it."""
+    deployed host run it; pin_host: mocapd alone on a core (LiveStudio)."""
     seconds = minutes * 60.0
     with tempfile.TemporaryDirectory() as tmp:
         # the truth's calibration: estimating one runs the whole take's camera messages through
         # the boxes' pieces first (mocap.demo.studio.calibrate), minutes for a long take
         studio = prepare(Path(tmp) / "studio", seconds, calibration="oracle")
         stop, samples = threading.Event(), {}
-        with LiveStudio(studio, lead_s=LEAD_S, record=Path(tmp) / "take.mcap", realtime=realtime) as live:
+        with LiveStudio(studio, lead_s=LEAD_S, record=Path(tmp) / "take.mcap", realtime=realtime,
+                        pin_host=pin_host) as live:
             sampler = threading.Thread(target=_sample, args=(live, stop, samples), daemon=True)
             sampler.start()
             live.wait(lambda arrived: live.take_s(time.time_ns()) > seconds + 1.0, live.lead_s + seconds + 60.0,
@@ -92,13 +93,15 @@ def bench(minutes: float = 10.0, realtime: bool = True) -> dict:
             stop.set()
             sampler.join()
             host_realtime = live.scheduled_realtime("mocapd")
+            host_cores, hub_cores = live.cores_of("mocapd"), live.cores_of("hub")  # pinned or not
             poses, healths = [a.message for a in live.poses()], [a.message for a in live.healths()]
         result = score(studio, Run(poses, healths, {}, live.start_ns))
         file_mb = (Path(tmp) / "take.mcap").stat().st_size / 1e6
     take_s = np.array([live.take_s(p.capture_time_ns) for p in poses])
     windows = latency_windows(take_s, np.array([p.latency_ms for p in poses]))
     last = healths[-1] if healths else None
-    return {"bench": "soak", "minutes": minutes, "lead_s": LEAD_S, "host_realtime": host_realtime, "frames": result["frames"], "dropped": result["dropped"],
+    return {"bench": "soak", "minutes": minutes, "lead_s": LEAD_S, "host_realtime": host_realtime,
+            "host_cores": host_cores, "hub_cores": hub_cores, "frames": result["frames"], "dropped": result["dropped"],
             "latency_p50_ms": result["latency_p50_ms"], "latency_p99_ms": result["latency_p99_ms"],
             "latency_p99_ms_by_5min": windows,
             "latency_p99_spread_pct": round(100.0 * (max(windows) / min(windows) - 1.0), 1) if windows else None,
