@@ -1,10 +1,13 @@
 """The monitor's server without a browser: what it serves, what a page receives over its
 WebSocket from a publisher standing in for mocapd (scene first, then every Health and the
 newest pose; a page that falls behind skips poses, never the newest), and bad input on the
-wire counted and dropped."""
+wire counted and dropped; bad command lines refused with a clear error."""
 
 import asyncio
 import json
+import socket
+import subprocess
+import sys
 
 import numpy as np
 import zmq
@@ -137,3 +140,21 @@ def test_a_page_that_falls_behind_skips_poses_but_gets_the_newest_and_every_heal
     sent = asyncio.run(_a_slow_page())
     assert [m["type"] for m in sent] == ["scene", "pose", "health"]
     assert sent[1]["frame"] == 99
+
+
+def _monitor_cli(*args):
+    return subprocess.run([sys.executable, "-m", "mocap.cli", "monitor", *args], capture_output=True, text=True,
+                          timeout=60)
+
+
+def test_a_bad_address_or_a_taken_port_is_a_clear_error():
+    out = _monitor_cli("--connect", "tcp://127.0.0.1:1", "--http", "127.0.0.1:http")
+    assert out.returncode == 2 and "expected [HOST:]PORT with a port 0..65535" in out.stderr, out.stderr
+    out = _monitor_cli("--http", "127.0.0.1:0")
+    assert out.returncode == 2 and "--connect EP or --session FILE is needed" in out.stderr, out.stderr
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        out = _monitor_cli("--connect", "tcp://127.0.0.1:1", "--http", f"127.0.0.1:{port}", "--duration", "5")
+    assert out.returncode == 2 and f"--http 127.0.0.1:{port}:" in out.stderr and "in use" in out.stderr, out.stderr
