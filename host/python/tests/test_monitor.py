@@ -147,11 +147,13 @@ def _monitor_cli(*args):
                           timeout=60)
 
 
-def test_a_bad_address_or_a_taken_port_is_a_clear_error():
+def test_a_bad_address_endpoint_or_a_taken_port_is_a_clear_error():
     out = _monitor_cli("--connect", "tcp://127.0.0.1:1", "--http", "127.0.0.1:http")
     assert out.returncode == 2 and "expected [HOST:]PORT with a port 0..65535" in out.stderr, out.stderr
     out = _monitor_cli("--http", "127.0.0.1:0")
     assert out.returncode == 2 and "--connect EP or --session FILE is needed" in out.stderr, out.stderr
+    out = _monitor_cli("--connect", "foo", "--http", "127.0.0.1:0", "--duration", "5")
+    assert out.returncode == 2 and "--connect foo: Invalid argument" in out.stderr, out.stderr
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()

@@ -7,6 +7,8 @@ import asyncio
 import sys
 from pathlib import Path
 
+import zmq
+
 from mocap.errors import InputError
 from mocap.io.session import Session
 from mocap.monitor import scene
@@ -59,5 +61,8 @@ def run(args: argparse.Namespace) -> int:
         pass
     except OSError as e:  # the port is taken, or the address is not this machine's
         print(f"mocap monitor: --http {args.http}: {e.strerror or e}", file=sys.stderr)
+        return 2
+    except zmq.ZMQError as e:  # an endpoint ZeroMQ cannot connect to
+        print(f"mocap monitor: --connect {' '.join(connect)}: {e}", file=sys.stderr)
         return 2
     return 0
