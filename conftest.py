@@ -87,12 +87,14 @@ def _still_running(pids: list[int], timeout_s: float) -> list[int]:
 def pytest_sessionfinish(session, exitstatus) -> None:
     found = {pid: cmd for pid, cmd in running_descendants(os.getpid()).items()
              if not any(helper in cmd for helper in HELPERS)}
-    left = _still_running(list(found), GRACE_S)
+    # Read again after the grace: a process listed in the middle of its exec has no command line yet.
+    left = {pid: _command(pid) for pid in _still_running(list(found), GRACE_S)}
+    left = {pid: cmd for pid, cmd in left.items() if not any(helper in cmd for helper in HELPERS)}
     if not left:
         return
     reporter = session.config.pluginmanager.get_plugin("terminalreporter")
     lines = [f"{len(left)} process(es) started by the suite still running {GRACE_S:.0f} s after it ended "
-             "(killed now):", *(f"  pid {pid}: {found[pid]}" for pid in left)]
+             "(killed now):", *(f"  pid {pid}: {cmd}" for pid, cmd in left.items())]
     if reporter is not None:
         reporter.write_sep("=", "processes left running", red=True, bold=True)
     for line in lines:
