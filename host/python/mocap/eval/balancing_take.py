@@ -11,8 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
+from mocap.calibration.rig import calibrate as rig_calibrate
+from mocap.calibration.rig import compare as rig_compare
 from mocap.eval import real_trial
-from mocap.io import retarget
+from mocap.io import calib_toml, retarget, take_folder
 from mocap.io.demo_data import TRIAL
 from mocap.io.trc import POSE2SIM_MARKERS, read_trc
 from mocap.takes import solve as take_solve
@@ -20,19 +22,27 @@ from mocap.takes import solve as take_solve
 MARKERS = POSE2SIM_MARKERS  # joints.csv columns -> Pose2Sim's TRC markers
 
 
+BOARD = "Calib_qualisys.toml"  # the trial's own calibration (a Qualisys wand and frame)
+SELF = "Calib_self.toml"  # one `mocap calibrate-rig` made from the take's detections
+
+
 def write(trial: Path, folder: Path) -> Path:
     """A take folder of the trial's files (copied in: a take reads nothing outside its folder)."""
     folder.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(trial / "Calib_qualisys.toml", folder / "Calib_qualisys.toml")
+    shutil.copyfile(trial / BOARD, folder / BOARD)
     for c in range(1, 5):
         shutil.copytree(trial / "pose" / f"cam{c}_json", folder / "pose" / f"cam{c}_json", dirs_exist_ok=True)
+    _take_toml(folder, BOARD)
+    return folder
+
+
+def _take_toml(folder: Path, calibration: str) -> None:
     poses = ", ".join(f'"pose/cam{c}_json"' for c in range(1, 5))
     (folder / "take.toml").write_text(
         "[take]\nframe_rate = 60\nn_frames = 100\nworld_up_axis = \"Z\"\nunits = \"m\"\n\n"
-        "[video]\ncalibration = \"Calib_qualisys.toml\"\n"
+        f"[video]\ncalibration = \"{calibration}\"\n"
         "camera_names = [\"cam_01\", \"cam_02\", \"cam_03\", \"cam_04\"]\n"
         f"pose_dirs = [{poses}]\nkeypoint_layout = \"BODY_25B\"\n")
-    return folder
 
 
 def compare(trial: Path, joints_csv: Path, rate: float = 60.0) -> dict:
@@ -73,3 +83,33 @@ def evaluate(trial: Path, out: Path, settings: Sequence[str] = ()) -> dict:
     report = take_solve.solve_take(write(trial, out / "take"), out / "solved", settings)
     return {"statuses": report["solve"]["statuses"], "settings": list(settings),
             **compare(trial, out / "solved" / "joints.csv", report["frame_rate"])}
+
+
+def evaluate_self_calibrated(trial: Path, out: Path, height_m: float, settings: Sequence[str] = ()) -> dict:
+    """`mocap eval-edge --take-solve OUT --self-calibrate H`: the take with its board calibration
+    replaced by one made from its own detections (mocap.calibration.rig, the person H metres tall),
+    solved, and its joints brought into the board's world by the similarity that takes the
+    self-calibrated camera centres onto the board's before the comparison with Pose2Sim's TRC
+    (whose markers were triangulated with the board's rig); `rig`: the rigs' comparison."""
+    folder = write(trial, out / "take")
+    take = take_folder.read_take(folder)
+    rig, _ = rig_calibrate.calibrate(list(take.rig.cameras), take.people, take.layout, take.frame_rate, height_m)
+    (folder / SELF).write_text(calib_toml.dumps(rig))
+    _take_toml(folder, SELF)
+    report = take_solve.solve_take(folder, out / "solved", settings)
+    s, r, t = rig_compare.similarity(rig_compare.centres(rig), rig_compare.centres(take.rig))
+    aligned = out / "solved" / "joints_in_the_boards_world.csv"
+    _moved_joints(out / "solved" / "joints.csv", aligned, s * r, t)
+    return {"statuses": report["solve"]["statuses"], "settings": list(settings), "height_m": height_m,
+            "rig": rig_compare.compare(rig, take.rig), **compare(trial, aligned, report["frame_rate"])}
+
+
+def _moved_joints(source: Path, target: Path, linear: np.ndarray, shift: np.ndarray) -> None:
+    """joints.csv with every x, y, z triple p replaced by linear p + shift."""
+    rows = list(csv.reader(open(source)))
+    header, values = rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
+    for j, name in enumerate(header):
+        if name.endswith("_x"):
+            values[:, j:j + 3] = values[:, j:j + 3] @ linear.T + shift
+    with open(target, "w", newline="") as f:
+        csv.writer(f).writerows([header, *values.tolist()])
