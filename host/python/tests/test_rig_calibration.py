@@ -105,6 +105,7 @@ def _blanked(take, camera: int, keep_frames: int = 0) -> list:
     ("one camera", "a rig calibration needs two or more"),
     ("a camera that saw no one", "no person detected"),
     ("a camera that saw the person on one frame", "keypoints the other cameras placed so far also see"),
+    ("two cameras that never saw the person at once", "seen by two cameras on the same frame"),
     ("a height in centimetres", "give the height in metres"),
 ])
 def test_bad_input_is_named(simulated, case, message):
@@ -114,6 +115,11 @@ def test_bad_input_is_named(simulated, case, message):
         cams, people = cams[:1], people[:1]
     elif case == "a camera that saw no one":
         people = _blanked(take, 3)
+    elif case == "two cameras that never saw the person at once":
+        half = len(take.people[0]) // 2
+        cams = cams[:2]
+        people = [[p if f < half else p[:0] for f, p in enumerate(take.people[0])],
+                  [p if f >= half else p[:0] for f, p in enumerate(take.people[1])]]
     elif case == "a camera that saw the person on one frame":
         people = _blanked(take, 3, keep_frames=1)
     else:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import cv2
 import numpy as np
 
 from mocap import _core, paths
@@ -55,7 +56,10 @@ def calibrate(intrinsics: list[_core.Camera], people: list[list[np.ndarray]], la
     step = -(-len(people[0]) // MAX_FRAMES)
     detections = [views.person_in_view(p[::step], len(layout)) for p in people]
     obs, keys = views.observations(intrinsics, detections)
-    cams, points, fixed = initial.initial(obs, names)
-    cams, points, _ = bundle.adjust(cams, points, obs, fixed=fixed)
+    try:
+        cams, points, fixed = initial.initial(obs, names)
+        cams, points, _ = bundle.adjust(cams, points, obs, fixed=fixed)
+    except (np.linalg.LinAlgError, cv2.error) as e:  # e.g. every point on one line, a camera at another's place
+        raise InputError(f"the detections do not determine the cameras' poses ({e})") from None
     cams, points, place = world.place(cams, points, keys, layout, len(detections[0]), rate / step, height_m)
     return _rig(intrinsics, cams), _report(obs, cams, points, names, place, len(detections[0]))

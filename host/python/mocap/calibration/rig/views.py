@@ -44,14 +44,17 @@ def observations(cameras: list[_core.Camera], detections: list[np.ndarray]) -> t
         if not s.any():
             raise InputError(f"camera {cam.name}: no person detected (confidence >= {MIN_CONFIDENCE}) on any frame")
     shared = seen.sum(axis=0) >= 2  # (F, K)
+    if not shared.any():
+        raise InputError("no keypoint of the person was seen by two cameras on the same frame")
     point_of = np.full(shared.shape, -1)
     point_of[shared] = np.arange(shared.sum())
     cam_idx, frame, kp = np.nonzero(seen & shared[None])
+    stacked = np.stack(detections)
     uv = np.zeros((len(cam_idx), 2))
     for c, cam in enumerate(cameras):
         mine = cam_idx == c
-        uv[mine] = normalised(cam, np.stack(detections)[c, frame[mine], kp[mine], :2])
-    obs = Observations(cam_idx, point_of[frame, kp], uv, np.stack(detections)[cam_idx, frame, kp, 2],
+        uv[mine] = normalised(cam, stacked[c, frame[mine], kp[mine], :2])
+    obs = Observations(cam_idx, point_of[frame, kp], uv, stacked[cam_idx, frame, kp, 2],
                        np.array([(cam.fx + cam.fy) / 2 for cam in cameras]))
     return obs, np.argwhere(shared)
 
