@@ -29,7 +29,6 @@ def die_with_parent(core: int | None = None) -> Callable[[], None]:
     return setup
 
 
-
 def pin(pid: int, cores: set[int]) -> None:
     """Every thread of process pid onto `cores` (threads it starts later inherit it); a process
     that has ended is left alone."""

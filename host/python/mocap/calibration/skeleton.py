@@ -39,7 +39,8 @@ PAIRS = {
 ALIASES = {"LHip": "left_hip", "RHip": "right_hip", "LKnee": "left_knee", "RKnee": "right_knee",
            "LAnkle": "left_ankle", "RAnkle": "right_ankle", "LShoulder": "left_shoulder",
            "RShoulder": "right_shoulder", "LElbow": "left_elbow", "RElbow": "right_elbow", "LWrist": "left_wrist",
-           "RWrist": "right_wrist", "LBigToe": "left_foot_index", "RBigToe": "right_foot_index"}
+           "RWrist": "right_wrist", "LBigToe": "left_foot_index", "RBigToe": "right_foot_index",
+           "LHeel": "left_heel", "RHeel": "right_heel"}
 MIN_FRAMES = 10
 
 

@@ -16,6 +16,7 @@ from mocap.calibration.rig import compare as rig_compare
 from mocap.eval import real_trial
 from mocap.io import calib_toml, retarget, take_folder
 from mocap.io.demo_data import TRIAL
+from mocap.io.joints_csv import read_positions_csv, write_positions_csv
 from mocap.io.trc import POSE2SIM_MARKERS, read_trc
 from mocap.takes import solve as take_solve
 
@@ -105,11 +106,6 @@ def evaluate_self_calibrated(trial: Path, out: Path, height_m: float, settings: 
 
 
 def _moved_joints(source: Path, target: Path, linear: np.ndarray, shift: np.ndarray) -> None:
-    """joints.csv with every x, y, z triple p replaced by linear p + shift."""
-    rows = list(csv.reader(open(source)))
-    header, values = rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
-    for j, name in enumerate(header):
-        if name.endswith("_x"):
-            values[:, j:j + 3] = values[:, j:j + 3] @ linear.T + shift
-    with open(target, "w", newline="") as f:
-        csv.writer(f).writerows([header, *values.tolist()])
+    """joints.csv with every position p replaced by linear p + shift."""
+    names, positions, times = read_positions_csv(source)
+    write_positions_csv(target, names, positions @ linear.T + shift, times)

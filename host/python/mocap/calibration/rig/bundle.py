@@ -30,9 +30,6 @@ class Cameras:
     rotation: np.ndarray  # (C, 3, 3) world -> camera
     translation: np.ndarray  # (C, 3)
 
-    def centres(self) -> np.ndarray:
-        return -np.einsum("cji,cj->ci", self.rotation, self.translation)
-
 
 def residuals(cams: Cameras, points: np.ndarray, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
     """(N, 2) pixel residuals and (N, 3) camera-frame points of every observation."""
@@ -62,7 +59,7 @@ def cauchy_weights(r: np.ndarray, obs: Observations, scale_px: float) -> np.ndar
     return obs.weight / (1.0 + (r ** 2).sum(axis=1) / scale_px ** 2)
 
 
-def _sum_by(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+def sum_by(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
     """(n, ...) sums of values (N, ...) grouped by index (N,) (np.add.at, faster)."""
     flat = values.reshape(len(values), -1)
     out = np.stack([np.bincount(index, flat[:, k], minlength=n) for k in range(flat.shape[1])], axis=1)
@@ -74,10 +71,10 @@ def _normal_equations(cams, points, obs, w):
     j_cam, j_pt = _jacobians(cams, p, obs)
     c, n_pts = len(cams.rotation), len(points)
     wj_cam, wj_pt = w[:, None, None] * j_cam, w[:, None, None] * j_pt
-    h_cc = _sum_by(obs.camera, np.swapaxes(j_cam, 1, 2) @ wj_cam, c)
-    g_c = _sum_by(obs.camera, np.einsum("nki,nk->ni", wj_cam, r), c)
-    h_pp = _sum_by(obs.point, np.swapaxes(j_pt, 1, 2) @ wj_pt, n_pts)
-    g_p = _sum_by(obs.point, np.einsum("nki,nk->ni", wj_pt, r), n_pts)
+    h_cc = sum_by(obs.camera, np.swapaxes(j_cam, 1, 2) @ wj_cam, c)
+    g_c = sum_by(obs.camera, np.einsum("nki,nk->ni", wj_cam, r), c)
+    h_pp = sum_by(obs.point, np.swapaxes(j_pt, 1, 2) @ wj_pt, n_pts)
+    g_p = sum_by(obs.point, np.einsum("nki,nk->ni", wj_pt, r), n_pts)
     h_cp = np.swapaxes(j_cam, 1, 2) @ wj_pt  # (N, 6, 3): one camera-point pair per observation
     return h_cc, g_c, h_pp, g_p, h_cp
 
@@ -90,16 +87,16 @@ def _step(cams, points, obs, w, damping, pairs, fixed):
     h_pp_inv = np.linalg.inv(h_pp)
     a = h_cp @ h_pp_inv[obs.point]  # (N, 6, 3)
     i, j = pairs
-    s = _sum_by(obs.camera[i] * c + obs.camera[j], a[i] @ np.swapaxes(h_cp[j], 1, 2), c * c).reshape(c, c, 6, 6)
+    s = sum_by(obs.camera[i] * c + obs.camera[j], a[i] @ np.swapaxes(h_cp[j], 1, 2), c * c).reshape(c, c, 6, 6)
     big = -s.transpose(0, 2, 1, 3).reshape(6 * c, 6 * c)
     for k in range(c):
         big[6 * k:6 * k + 6, 6 * k:6 * k + 6] += h_cc[k] + damping * np.diag(np.diag(h_cc[k]) + 1e-9)
-    rhs = _sum_by(obs.camera, np.einsum("nij,nj->ni", a, g_p[obs.point]), c) - g_c
+    rhs = sum_by(obs.camera, np.einsum("nij,nj->ni", a, g_p[obs.point]), c) - g_c
     free = np.repeat(np.arange(c) != fixed, 6)
     dc = np.zeros(6 * c)
     dc[free] = np.linalg.solve(big[np.ix_(free, free)], rhs.ravel()[free])
     dc = dc.reshape(c, 6)
-    back = g_p + _sum_by(obs.point, np.einsum("nji,nj->ni", h_cp, dc[obs.camera]), len(points))
+    back = g_p + sum_by(obs.point, np.einsum("nji,nj->ni", h_cp, dc[obs.camera]), len(points))
     return dc, -np.einsum("pij,pj->pi", h_pp_inv, back)
 
 

@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from mocap import rotations
-from mocap.calibration.rig.bundle import Cameras, Observations
+from mocap.calibration.rig.bundle import Cameras, Observations, sum_by
 from mocap.calibration.rig.views import shared_counts
 from mocap.errors import InputError
 
@@ -23,8 +23,7 @@ def triangulate(cams: Cameras, obs: Observations, placed: np.ndarray, n_points: 
     u, v = obs.uv[use, 0:1], obs.uv[use, 1:2]
     rows = np.stack([u * proj[:, 2] - proj[:, 0], v * proj[:, 2] - proj[:, 1]], axis=1)  # (n, 2, 4)
     rows *= np.sqrt(obs.weight[use])[:, None, None]
-    ata = np.zeros((n_points, 4, 4))
-    np.add.at(ata, obs.point[use], np.swapaxes(rows, 1, 2) @ rows)
+    ata = sum_by(obs.point[use], np.swapaxes(rows, 1, 2) @ rows, n_points)
     views = np.bincount(obs.point[use], minlength=n_points)
     _, vecs = np.linalg.eigh(ata + 1e-12 * np.eye(4))
     h = vecs[:, :, 0]

@@ -40,13 +40,8 @@ class World:
 
 
 def named(points: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
-    """Layout keypoints (F, K, 3) by our names (left_hip, ...; heels as left_heel)."""
-    out = {}
-    for k, name in enumerate(names):
-        ours = ALIASES.get(name, name)
-        ours = {"LHeel": "left_heel", "RHeel": "right_heel"}.get(ours, ours)
-        out[ours] = points[:, k]
-    return out
+    """Layout keypoints (F, K, 3) by our names (left_hip, left_heel, ...)."""
+    return {ALIASES.get(name, name): points[:, k] for k, name in enumerate(names)}
 
 
 def _mid(kp: dict, a: str, b: str) -> np.ndarray:
