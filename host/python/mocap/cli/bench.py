@@ -7,15 +7,16 @@ import argparse
 import json
 from pathlib import Path
 
+from mocap.batch import bench as batch_bench
 from mocap.demo import drill, monitor_bench, record_drill, soak
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, MocapError
-from mocap.eval import bench, edge_detector, peer
+from mocap.eval import bench, edge_detector, peer, scale_plot
 from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill"]
+KINDS = ["solver", "live", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill", "batch", "scale"]
 ON_REQUEST = ["soak"]  # not in the default run: it lasts --minutes
 
 
@@ -33,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--monitor-seconds", type=float, default=30.0,
                    help="length of the take with the live view open (default 30)")
     b.add_argument("--screenshot", default=None, metavar="PNG", help="the live view halfway through that take")
+    b.add_argument("--plot", default=None, metavar="PNG", help="scale: the cost against the cameras drawn into PNG")
     b.add_argument("--rate", type=float, default=60.0, help="capture rate, Hz (default 60)")
     b.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     b.add_argument("--repeats", type=int, default=3, help="runs of the workload; the lowest median is kept")
@@ -59,6 +61,11 @@ def run(args: argparse.Namespace) -> int:
     if "soak" in args.only:  # the live studio for --minutes: latency windows, memory, descriptors
         print(json.dumps(soak.bench(args.minutes, realtime=not args.live_normal_priority, pin_host=args.pin_host)),
               flush=True)
+    if "batch" in args.only:  # the same takes serially and on a LocalCluster of two workers (both cores)
+        try:
+            print(json.dumps(batch_bench.bench()), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "batch", "skipped": str(e)}), flush=True)
     if "edge" in args.only:
         try:
             print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)
@@ -75,6 +82,14 @@ def run(args: argparse.Namespace) -> int:
             print(json.dumps(result), flush=True)
         except DataMissingError as e:
             print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
+    if "scale" in args.only:  # the solve's cost against cameras (1-32), IMUs and keypoints, on this core
+        try:
+            result = bench.scale(rate=args.rate, seed=args.seed, repeats=args.repeats)
+            if args.plot:
+                scale_plot.plot(result, Path(args.plot))
+            print(json.dumps(result), flush=True)
+        except DataMissingError as e:
+            print(json.dumps({"bench": "scale", "skipped": str(e)}), flush=True)
     if "peer" in args.only:  # ours against Pose2Sim's triangulation, both on this core
         try:
             print(json.dumps(peer.bench(repeats=args.repeats)), flush=True)

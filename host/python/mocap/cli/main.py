@@ -8,15 +8,16 @@ import errno
 import logging
 import sys
 
-from mocap.cli import (bench, calibrate, calibrate_rig, demo, detect, eval_edge, eval_imu_filter, export, imu_filter,
-                       imu_stats, keys, monitor, record, recover, replay, rig, simulate, skeleton, solve, train_prior)
+from mocap.cli import (batch, bench, calibrate, calibrate_rig, demo, detect, eval_edge, eval_imu_filter, export,
+                       imu_filter, imu_stats, keys, monitor, record, recover, replay, rig, simulate, skeleton, solve,
+                       train_prior)
 from mocap.cli import eval as evaluate
 from mocap.errors import MocapError
 from mocap_edge.errors import EdgeError
 
 # In the order `mocap --help` lists them.
 COMMANDS = (bench, skeleton, train_prior, evaluate, imu_stats, demo, calibrate, calibrate_rig, simulate, detect, eval_edge,
-            solve, export, record, replay, monitor, recover, keys, imu_filter, eval_imu_filter, rig)
+            solve, batch, export, record, replay, monitor, recover, keys, imu_filter, eval_imu_filter, rig)
 
 
 def build_parser() -> argparse.ArgumentParser:

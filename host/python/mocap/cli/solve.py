@@ -8,11 +8,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 from mocap.errors import InputError
-from mocap.io.bvh_export import write_bvh
-from mocap.io.joints_csv import write_positions_csv
 from mocap.recording import offline, reader
 from mocap.takes import solve as take_solve
 
@@ -58,11 +54,7 @@ def run(args: argparse.Namespace) -> int:
                          f"{integrity.describe()}){clock}")
     if clock:
         print(f"mocap solve: warning: {args.recording}{clock}", file=sys.stderr)
-    thetas = np.array([list(p.theta) for p in poses])
-    write_bvh(args.out, skeleton, thetas, offline.frame_rate(poses))  # the latest calibration's skeleton
-    if args.csv:  # the bones as solved, each frame with the calibration in use then
-        times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
-        write_positions_csv(args.csv, skeleton.bone_names, offline.joint_positions(poses), times)
+    offline.write_poses(poses, skeleton, Path(args.out), Path(args.csv) if args.csv else None)
     print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped, "integrity": integrity.as_dict()}),
           flush=True)
     return 0

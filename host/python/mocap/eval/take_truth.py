@@ -31,8 +31,13 @@ def _truth(folder: Path) -> tuple[_core.Skeleton, np.ndarray, dict]:
 
 def score(folder: Path, out: Path) -> dict:
     """Solves the take into `out` and scores it against its truth."""
+    _truth(folder)  # a take without its truth is refused before the solve
+    return score_solved(folder, take_solve.solve(folder, out))
+
+
+def score_solved(folder: Path, solved: take_solve.SolvedTake) -> dict:
+    """A solve of the take folder scored against the truth written beside it."""
     skeleton, truth_thetas, truth = _truth(folder)
-    solved = take_solve.solve(folder, out)
     fk = [solved.skeleton.forward_kinematics(th) for th in solved.thetas]
     r_s, p_s = np.array([r for r, _ in fk]), np.array([p for _, p in fk])
     e = metrics.transform_errors(skeleton, truth_thetas, p_s, r_s, 1.0 / truth["frame_rate"])

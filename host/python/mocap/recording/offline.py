@@ -14,6 +14,8 @@ import numpy as np
 
 from mocap import _core
 from mocap.errors import InputError
+from mocap.io.bvh_export import write_bvh
+from mocap.io.joints_csv import write_positions_csv
 from mocap.net import wire
 from mocap.recording import reader
 
@@ -71,3 +73,12 @@ def frame_rate(poses: list) -> float:
     if len(poses) < 2:
         return 60.0
     return float(1e9 / np.median(np.diff([p.capture_time_ns for p in poses])))
+
+
+def write_poses(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None = None) -> None:
+    """The solved poses as a BVH of `skeleton` (the latest calibration's) and, if csv, the joint
+    positions as solved, each frame with the calibration in use then (mocap.io.joints_csv)."""
+    write_bvh(bvh, skeleton, np.array([list(p.theta) for p in poses]), frame_rate(poses))
+    if csv is not None:
+        times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
+        write_positions_csv(csv, skeleton.bone_names, joint_positions(poses), times)
