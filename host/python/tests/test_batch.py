@@ -85,13 +85,32 @@ def test_a_batch_equals_the_serial_solves_and_a_broken_take_fails_alone(takes, b
     for name in ("walk", "turn"):
         alone = _mocap("solve", "--take", takes[name], "--out", tmp_path / name)
         assert alone.returncode == 0, alone.stderr
-        for f in ("joints.csv", "take.bvh", "calibration.json"):
+        for f in ("joints.csv", "take.bvh"):
             assert (out / name / f).read_bytes() == (tmp_path / name / f).read_bytes(), (name, f)
+        # the report's estimates differ in their 14th digit: numpy's BLAS runs on one thread in a worker
+        _assert_close(json.loads((out / name / "calibration.json").read_text()),
+                      json.loads((tmp_path / name / "calibration.json").read_text()))
         assert results[name]["truth"]["joint_centres_pos_cm"] < 5.0
         assert (out / name / "take.trc").stat().st_size > 0 and (out / name / "take.glb").stat().st_size > 0
     assert results["turn_live"]["frames"] == read_take(takes["turn"]).n_frames
     assert (out / "turn_live" / "session" / "session.json").is_file()
     assert "| broken | failed |" in run.stdout and (out / "summary.md").read_text() == run.stdout
+
+
+def _assert_close(a, b, path="report"):
+    """The same JSON structure and strings, numbers within 1e-9 (relative)."""
+    if isinstance(a, dict):
+        assert sorted(a) == sorted(b), path
+        for k in a:
+            _assert_close(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, list):
+        assert len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            _assert_close(x, y, f"{path}[{i}]")
+    elif isinstance(a, float) or isinstance(b, float):
+        assert a == pytest.approx(b, rel=1e-9, abs=1e-12), path
+    else:
+        assert a == b, path
 
 
 def test_a_second_batch_skips_what_it_solved_and_solves_what_changed(takes, batch, tmp_path):

@@ -48,8 +48,8 @@ def test_video_cameras_in_their_serials_order_and_a_camera_looks_down_its_z(tmp_
     assert (cam.width, cam.height, cam.fx, cam.cx, cam.cy) == (640, 480, 500.0, 320.0, 240.0)
     # the camera 3 m above the origin, Qualisys's camera z pointing up: OpenCV's z points down,
     # so the origin is 3 m in front of it, at the image centre
-    np.testing.assert_allclose(np.asarray(cam.rotation) @ [0, 0, 0] + cam.translation, [0, 0, 3.0])
-    np.testing.assert_allclose(np.asarray(cam.rotation) @ [0, 0, 1.0], [0, 0, -1.0])
+    np.testing.assert_allclose(np.asarray(cam.rotation) @ [0, 0, 0] + cam.translation, [0, 0, 3.0], atol=1e-12)
+    np.testing.assert_allclose(np.asarray(cam.rotation) @ [0, 0, 1.0], [0, 0, -1.0], atol=1e-12)
 
 
 @pytest.mark.parametrize("text, says", [
