@@ -26,6 +26,7 @@ def client(scheduler: str | None, workers: int | None) -> Iterator:
     or not: distributed's worker processes watch a pipe only their parent holds)."""
     from distributed import Client, LocalCluster  # loaded only by the batch: it takes a second
 
+    logging.getLogger("distributed").setLevel(logging.WARNING)  # its INFO lines would bury the progress line
     if scheduler is not None:
         try:
             c = Client(scheduler, timeout=CONNECT_TIMEOUT_S)

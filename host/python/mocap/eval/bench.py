@@ -52,14 +52,15 @@ def _takes(skeleton, layout, imus, clips, noise: Noise, rng, cameras: int = 8) -
     for _, thetas, dt in clips:
         rig = studio.ring_rig(cameras, center=thetas[:, :2].mean(axis=0), radius=5.0)
         times = np.arange(len(thetas)) * dt
-        quats, accs = studio.imu_readings(skeleton, imus, thetas, times)
+        quats, accs = (studio.imu_readings(skeleton, imus, thetas, times) if imus else  # a video-only solve
+                       (np.zeros((len(thetas), 0, 4)), np.zeros((len(thetas), 0, 3))))
         frames = []
         for f, theta in enumerate(thetas):
             kp = studio.keypoints(rig, studio.site_positions(skeleton, layout.bones, layout.offsets, theta))
             seen = kp[..., 2] > 0
             kp[..., :2] += rng.normal(scale=noise.pixel_sigma, size=kp[..., :2].shape) * seen[..., None]
             kp[..., 2] *= noise.confidence
-            q = _noisy_quaternions(quats[f], noise.orientation_sigma, rng)
+            q = _noisy_quaternions(quats[f], noise.orientation_sigma, rng) if imus else quats[f]
             a = accs[f] + rng.normal(scale=noise.acceleration_sigma, size=accs[f].shape)
             frames.append((times[f], kp, q, a))
         takes.append(Take(rig, thetas, frames))
