@@ -1,4 +1,4 @@
-"""What a batch is given: take folders and recordings, the names their results get, and the
+"""What a batch is given: take folders, recordings and trials' videos, the names their results get, and the
 content hash that says a take was already solved from the same inputs, options and code."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ BLOCK = 1 << 20
 @dataclasses.dataclass(frozen=True)
 class Input:
     path: Path  # absolute: a worker on another machine reads it there (a shared file system)
-    kind: str  # TAKE or RECORDING
+    kind: str  # TAKE, RECORDING or VIDEOS
     name: str  # its results' folder under the batch's output
 
 
