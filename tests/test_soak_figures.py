@@ -41,3 +41,33 @@ def test_a_process_is_sampled_from_proc_until_it_ends():
         child.stdin.close()
         child.wait(timeout=10)
     assert soak.proc_sample(child.pid) is None and soak.proc_sample(os.getpid()) is not None
+
+
+def test_each_window_has_the_host_drops_in_it_and_the_cores_share():
+    from types import SimpleNamespace as NS
+    stream = lambda dropped: NS(stream="cam0", dropped=dropped)  # noqa: E731
+    healths = [NS(source="host", time_ns=int(t * 1e9), streams=[stream(d), stream(1)])
+               for t, d in [(10, 0), (290, 5), (310, 5), (590, 45), (610, 45)]]
+    healths.insert(2, NS(source="hub0", time_ns=int(300e9), streams=[stream(1000)]))  # not the host's
+    assert soak.dropped_windows(healths, lambda ns: ns / 1e9, 2) == [6, 40]
+
+    def times(busy0, busy1, steal):  # 100 ticks per core per sample step
+        return {"cpu": (busy0 + busy1, steal, 200), "cpu0": (busy0, 0, 100), "cpu1": (busy1, steal, 100)}
+    cpu, total = [], {k: (0, 0, 0) for k in ("cpu", "cpu0", "cpu1")}
+    for t in range(0, 601, 5):
+        step = times(50, 20, 0) if t <= 300 else times(90, 60, 10)
+        total = {k: tuple(a + b for a, b in zip(total[k], step[k])) for k in step}
+        cpu.append((float(t), total))
+    first, second = soak.cpu_windows(cpu, 2)
+    assert first == {"steal_pct": 0.0, "cpu0_busy_pct": 50.0, "cpu1_busy_pct": 20.0}
+    assert second["steal_pct"] == 5.0 and second["cpu0_busy_pct"] == 90.0 and second["cpu1_busy_pct"] == 60.0
+
+
+def test_the_machine_s_cpu_times_are_read_and_only_grow():
+    a = soak.cpu_times()
+    b = soak.cpu_times()
+    assert "cpu" in a and "cpu0" in a and set(a) == set(b)
+    for name in a:
+        busy, steal, total = a[name]
+        assert 0 <= busy <= total and 0 <= steal <= total
+        assert all(y >= x for x, y in zip(a[name], b[name]))

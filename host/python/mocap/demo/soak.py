@@ -1,7 +1,9 @@
 """The soak: the live simulated studio (mocap.demo.live_studio: 8 camera boxes, the IMU hub
 and its nodes, mocapd, the recorder) for M minutes (`mocap bench --only soak --minutes M`):
 frames that never came back, the host's latency p99 per 5-minute window, and every process's
-resident memory and open file descriptors sampled from /proc."""
+resident memory and open file descriptors sampled from /proc. Beside each window: the inputs the
+host dropped in it and what the machine did (each core's busy share and the time the hypervisor
+stole, from /proc/stat), so a window that breaks the bound says whether the cause came from outside."""
 
 from __future__ import annotations
 
@@ -38,13 +40,68 @@ def proc_sample(pid: int) -> tuple[float, int] | None:
         return None
 
 
-def _sample(live: LiveStudio, stop: threading.Event, samples: dict[str, list]) -> None:
-    """Every SAMPLE_S: (take s, RSS MB, fds) of each process, by name, until stop."""
+def cpu_times() -> dict[str, tuple[int, int, int]]:
+    """Per line of /proc/stat ("cpu" the machine, "cpu0"...): (busy, steal, total) in clock
+    ticks since boot; busy excludes idle, iowait and steal."""
+    out = {}
+    with open("/proc/stat") as f:
+        for line in f:
+            if not line.startswith("cpu"):
+                break
+            name, *fields = line.split()
+            user, nice, system, idle, iowait, irq, softirq, steal = (int(v) for v in fields[:8])
+            out[name] = (user + nice + system + irq + softirq, steal,
+                         user + nice + system + idle + iowait + irq + softirq + steal)
+    return out
+
+
+def _sample(live: LiveStudio, stop: threading.Event, samples: dict[str, list], cpu: list) -> None:
+    """Every SAMPLE_S: (take s, RSS MB, fds) of each process, by name, and (take s,
+    cpu_times()), until stop."""
     while not stop.wait(SAMPLE_S):
         t = live.take_s(time.time_ns())
+        cpu.append((t, cpu_times()))
         for name, pid in live.pids().items():
             if (got := proc_sample(pid)) is not None:
                 samples.setdefault(name, []).append((t, *got))
+
+
+def _bounds(window_s: float, n: int) -> list[tuple[float, float]]:
+    return [(i * window_s, (i + 1) * window_s) for i in range(n)]
+
+
+def cpu_windows(cpu: list, n: int, window_s: float = WINDOW_S) -> list[dict]:
+    """Per latency window: each core's busy share and the machine's stolen share (%) between
+    the samples nearest its bounds."""
+    out = []
+    for lo, hi in _bounds(window_s, n):
+        inside = [c for t, c in cpu if lo <= t <= hi]
+        if len(inside) < 2:
+            out.append({})
+            continue
+        a, b = inside[0], inside[-1]
+        row = {}
+        for name in b:
+            busy, steal, total = (y - x for x, y in zip(a[name], b[name]))
+            if total > 0:
+                if name == "cpu":
+                    row["steal_pct"] = round(100.0 * steal / total, 2)
+                else:
+                    row[f"{name}_busy_pct"] = round(100.0 * busy / total, 1)
+        out.append(row)
+    return out
+
+
+def dropped_windows(healths: list, take_s_of, n: int, window_s: float = WINDOW_S) -> list[int]:
+    """Per latency window: inputs the host dropped in it (late, stale clock, malformed: its
+    Health's per-stream counts, which only grow, differenced across the window)."""
+    totals = [(take_s_of(h.time_ns), sum(s.dropped for s in h.streams)) for h in healths if h.source == "host"]
+    out = []
+    for lo, hi in _bounds(window_s, n):
+        before = [d for t, d in totals if t <= lo]
+        upto = [d for t, d in totals if t <= hi]
+        out.append((upto[-1] if upto else 0) - (before[-1] if before else 0))
+    return out
 
 
 def memory(samples: dict[str, list], warm_up_s: float = WARM_UP_S) -> dict:
@@ -83,10 +140,10 @@ def bench(minutes: float = 10.0, realtime: bool = True, pin_host: bool = False) 
         # the truth's calibration: estimating one runs the whole take's camera messages through
         # the boxes' pieces first (mocap.demo.studio.calibrate), minutes for a long take
         studio = prepare(Path(tmp) / "studio", seconds, calibration="oracle")
-        stop, samples = threading.Event(), {}
+        stop, samples, cpu = threading.Event(), {}, []
         with LiveStudio(studio, lead_s=LEAD_S, record=Path(tmp) / "take.mcap", realtime=realtime,
                         pin_host=pin_host) as live:
-            sampler = threading.Thread(target=_sample, args=(live, stop, samples), daemon=True)
+            sampler = threading.Thread(target=_sample, args=(live, stop, samples, cpu), daemon=True)
             sampler.start()
             live.wait(lambda arrived: live.take_s(time.time_ns()) > seconds + 1.0, live.lead_s + seconds + 60.0,
                       "the take's end")
@@ -104,6 +161,8 @@ def bench(minutes: float = 10.0, realtime: bool = True, pin_host: bool = False) 
             "host_cores": host_cores, "hub_cores": hub_cores, "frames": result["frames"], "dropped": result["dropped"],
             "latency_p50_ms": result["latency_p50_ms"], "latency_p99_ms": result["latency_p99_ms"],
             "latency_p99_ms_by_5min": windows,
+            "host_inputs_dropped_by_5min": dropped_windows(healths, live.take_s, len(windows)),
+            "cpu_by_5min": cpu_windows(cpu, len(windows)),
             "latency_p99_spread_pct": round(100.0 * (max(windows) / min(windows) - 1.0), 1) if windows else None,
             "joint_centres_pos_cm": result.get("joint_centres_pos_cm"), "recording_mb": round(file_mb, 1),
             "host_inputs_dropped": {s.stream: s.dropped for s in (last.streams if last else []) if s.dropped},
