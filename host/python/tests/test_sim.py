@@ -157,3 +157,23 @@ def test_camera_positions_spread_round_the_ring():
     assert camera_positions(2) == [0, 2]  # 90 degrees apart, never opposite
     with pytest.raises(ValueError):
         camera_positions(9)
+
+
+def test_a_stage_of_dozens_of_cameras_rings_the_performer_and_every_camera_sees_them():
+    from mocap.sim.take import camera_rig
+
+    thetas = np.zeros((2, 66))
+    thetas[:, :3] = [1.0, -2.0, 1.0]
+    rig = camera_rig(32, thetas)
+    centres = np.array([c.center() for c in rig.cameras])
+    assert len(rig.cameras) == 32 and len({c.name for c in rig.cameras}) == 32
+    around = centres[:, :2] - [1.0, -2.0]
+    assert np.allclose(np.linalg.norm(around, axis=1), 4.5)  # on a ring round the motion
+    angles = np.sort(np.degrees(np.arctan2(around[:, 1], around[:, 0])) % 360)
+    assert np.allclose(np.diff(angles), 360 / 32)  # evenly
+    assert sorted(set(np.round(centres[:, 2], 6))) == [1.0, 2.5]  # low and high
+    for c in rig.cameras:  # the performer is in every image
+        pixels, valid = c.project(np.array([[1.0, -2.0, 1.0]]))
+        assert valid[0] and np.allclose(pixels[0], [c.width / 2, c.height / 2], atol=1.0)
+    eight = camera_rig(8, thetas)  # up to 8: the ring's positions as before
+    assert [c.name for c in camera_rig(4, thetas).cameras] == [eight.cameras[i].name for i in (0, 2, 4, 6)]

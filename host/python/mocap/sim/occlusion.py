@@ -2,7 +2,8 @@
 
 A keypoint is hidden from a camera when the ray from the camera centre to it passes
 through a capsule of another body part (its own bone's and its neighbours' capsules are
-skipped: the keypoint lies inside them).
+skipped: the keypoint lies inside them), or of another person's body when several share the
+stage (mocap.sim.people).
 """
 
 from __future__ import annotations
@@ -40,12 +41,21 @@ def _segment_distance(p0, p1, q0, q1) -> np.ndarray:
     return np.linalg.norm(p0 + d1 * s[..., None] - (q0 + d2 * t[..., None]), axis=-1)
 
 
-def hidden(centres: np.ndarray, points: np.ndarray, point_bones: np.ndarray, rot: np.ndarray,
-           pos: np.ndarray, caps, parents: list[int]) -> np.ndarray:
-    """(cameras, K) True where keypoint k is hidden from camera c."""
+def segments(rot: np.ndarray, pos: np.ndarray, caps) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The capsules of a body in a pose (bone rotations and origins from forward kinematics):
+    (start points, end points, radii)."""
     start, end, radius = caps
     a = pos[start]
     b = np.where((end >= 0)[:, None], pos[np.maximum(end, 0)], pos[start] + rot[start] @ np.array([0, 0, 0.2]))
+    return a, b, radius
+
+
+def hidden(centres: np.ndarray, points: np.ndarray, point_bones: np.ndarray, rot: np.ndarray,
+           pos: np.ndarray, caps, parents: list[int], others: tuple | None = None) -> np.ndarray:
+    """(cameras, K) True where keypoint k is hidden from camera c; others: the segments() of
+    the other people on the stage, concatenated (each of their capsules can hide it)."""
+    start, end, radius = caps
+    a, b, _ = segments(rot, pos, caps)
     # Capsules touching the keypoint's bone (as start or end) or its parent are its own.
     own = np.zeros((len(points), len(start)), dtype=bool)
     for k, bone in enumerate(point_bones):
@@ -55,4 +65,8 @@ def hidden(centres: np.ndarray, points: np.ndarray, point_bones: np.ndarray, rot
     tip = points[None, :, None, :]
     ray_end = cam + (tip - cam) * 0.98  # stop just short of the keypoint itself
     dist = _segment_distance(cam, ray_end, a[None, None], b[None, None])
-    return ((dist < radius[None, None]) & ~own[None]).any(axis=-1)
+    out = ((dist < radius[None, None]) & ~own[None]).any(axis=-1)
+    if others is not None and len(others[0]):
+        oa, ob, oradius = others
+        out |= (_segment_distance(cam, ray_end, oa[None, None], ob[None, None]) < oradius[None, None]).any(axis=-1)
+    return out

@@ -78,7 +78,17 @@ def camera_positions(n: int) -> list[int]:
     return [0, 2] if n == 2 else sorted({round(i * 8 / n) % 8 for i in range(n)})
 
 
-def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
+def camera_rig(n: int, thetas: np.ndarray, radius: float = 4.5) -> _core.Rig:
+    """n cameras round the motion's centre: up to 8 on the 8 positions of camera_positions,
+    more (a stage's dozens) evenly on a ring of their own, alternately low and high."""
+    ring = lambda cameras: studio.ring_rig(cameras, center=thetas[:, :2].mean(axis=0), radius=radius,  # noqa: E731
+                                           heights=(1.0, 2.5))
+    if n > 8:
+        return ring(n)
+    return _core.Rig([ring(8).cameras[i] for i in camera_positions(n)])
+
+
+def perturbed_rig(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
     cams = []
     for cam in rig.cameras:
         axis, shift = rng.normal(size=3), rng.normal(size=3)
@@ -87,6 +97,34 @@ def _perturbed(rig: _core.Rig, degrees: float, metres: float, rng) -> _core.Rig:
         cam.translation = -cam.rotation @ centre
         cams.append(cam)
     return _core.Rig(cams)
+
+
+def preset_of(config: Config) -> Preset:
+    preset = PRESETS[config.preset]
+    if config.detect_every:
+        preset = dataclasses.replace(preset, period=config.detect_every[0], burst=config.detect_every[1])
+    return preset
+
+
+def performer(skeleton: _core.Skeleton, config: Config, rng) -> tuple[_core.KeypointLayout, np.ndarray, list]:
+    """What a performer brings: the keypoint layout on their skeleton, where the detector
+    finds each keypoint on them (the layout's sites plus a systematic offset drawn per
+    performer), and their suit (the preset's IMU set, each sensor mounted at a random turn of
+    up to config.mount_max_deg)."""
+    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{config.layout}.json"), skeleton).scaled_to(skeleton)
+    sites = layout.offsets + detector.site_offsets(len(layout), config.detector, rng)
+    imus = _core.load_imu_sites(str(paths.IMU_SETS[preset_of(config).imus]), skeleton)
+    for s in imus:
+        axis = rng.normal(size=3)
+        s.mount = rotations.exp(axis / np.linalg.norm(axis) * np.radians(rng.uniform(0, config.mount_max_deg)))
+    return layout, sites, imus
+
+
+def frame_times(n: int, dt: float, config: Config, rng) -> tuple[np.ndarray, np.ndarray]:
+    """The true frame times and those the cameras report (config.time_jitter_s, increasing)."""
+    true_times = np.arange(n) * dt
+    times = true_times + rng.normal(scale=config.time_jitter_s, size=n)
+    return true_times, np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))
 
 
 def simulate(clip: Path, config: Config, rng: np.random.Generator) -> Take:
@@ -102,23 +140,12 @@ def simulate_motion(skeleton: _core.Skeleton, thetas: np.ndarray, dt: float, con
     with config's bends and slips."""
     for b in config.bends:
         thetas = extremes.bend(thetas, skeleton.bone_names, b, dt)
-    preset = PRESETS[config.preset]
-    if config.detect_every:
-        preset = dataclasses.replace(preset, period=config.detect_every[0], burst=config.detect_every[1])
-    layout = _core.KeypointLayout.load(str(paths.LAYOUTS / f"{config.layout}.json"), skeleton).scaled_to(skeleton)
-    sites = layout.offsets + detector.site_offsets(len(layout), config.detector, rng)
-    imus = _core.load_imu_sites(str(paths.IMU_SETS[preset.imus]), skeleton)
-    for s in imus:
-        axis = rng.normal(size=3)
-        s.mount = rotations.exp(axis / np.linalg.norm(axis) * np.radians(rng.uniform(0, config.mount_max_deg)))
-    chosen = camera_positions(config.cameras or preset.cameras)
-    ring = lambda: studio.ring_rig(8, center=thetas[:, :2].mean(axis=0), radius=4.5, heights=(1.0, 2.5))  # noqa: E731
-    true_rig = _core.Rig([ring().cameras[i] for i in chosen])
-    told_rig = _perturbed(_core.Rig([ring().cameras[i] for i in chosen]), config.camera_rotation_deg,
-                          config.camera_shift_m, rng)
-    true_times = np.arange(len(thetas)) * dt
-    times = true_times + rng.normal(scale=config.time_jitter_s, size=len(thetas))
-    times = np.maximum.accumulate(np.maximum(times, true_times - 0.4 * dt))  # stay increasing
+    preset = preset_of(config)
+    layout, sites, imus = performer(skeleton, config, rng)
+    true_rig = camera_rig(config.cameras or preset.cameras, thetas)
+    told_rig = perturbed_rig(camera_rig(config.cameras or preset.cameras, thetas), config.camera_rotation_deg,
+                             config.camera_shift_m, rng)
+    true_times, times = frame_times(len(thetas), dt, config, rng)
     keypoints = _detections(skeleton, layout, sites, true_rig, thetas, preset, config, rng)
     if config.cameras_lost_at_s is not None:
         keypoints = [None if at >= config.cameras_lost_at_s else k for k, at in zip(keypoints, true_times)]
