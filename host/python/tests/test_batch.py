@@ -239,3 +239,20 @@ def test_a_trial_of_videos_is_detected_and_solved_near_pose2sims_own_result(tmp_
     result = _results(tmp_path)["Trial_1"]
     assert result["detected"]["videos"] == 4 and result["frames"] == 100
     assert balancing_take.compare(TRIAL_CACHE, tmp_path / "Trial_1" / "joints.csv")["distance_cm"] < 6.0
+
+
+def test_the_code_a_take_depends_on_decides_when_it_is_solved_again(tmp_path, monkeypatch):
+    """A trial of videos depends on the detector's weights as well as the host's code; a take
+    folder does not: new weights re-detect the trials and leave the take folders solved."""
+    models = tmp_path / "blazepose"
+    models.mkdir()
+    (models / "pose_landmark_full.onnx").write_bytes(b"weights 1")
+    monkeypatch.setattr(inputs.resources, "models_dir", lambda name: models)
+    inputs.code_fingerprint.cache_clear()
+    before = {kind: inputs.code_fingerprint(kind) for kind in (inputs.VIDEOS, inputs.TAKE)}
+    (models / "pose_landmark_full.onnx").write_bytes(b"weights 2")
+    inputs.code_fingerprint.cache_clear()
+    after = {kind: inputs.code_fingerprint(kind) for kind in (inputs.VIDEOS, inputs.TAKE)}
+    inputs.code_fingerprint.cache_clear()
+    assert after[inputs.TAKE] == before[inputs.TAKE] and after[inputs.VIDEOS] != before[inputs.VIDEOS]
+    assert before[inputs.TAKE] != before[inputs.VIDEOS]

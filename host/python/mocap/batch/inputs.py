@@ -12,10 +12,12 @@ from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
+import mocap_edge
 from mocap import paths
 from mocap.batch import videos
 from mocap.errors import InputError
 from mocap.takes.export import is_recording
+from mocap_edge import resources
 
 TAKE = "take"  # a take folder (docs/take_format.md)
 RECORDING = "recording"  # an MCAP recording of a live take (`mocap record`)
@@ -80,7 +82,7 @@ def content_hash(take: Input, options: dict) -> str:
     """SHA-256 of the take's bytes (every file of a take folder, with its relative path), the
     batch's options and the code that solves it."""
     digest = hashlib.sha256()
-    digest.update(json.dumps({"kind": take.kind, "options": options, "code": code_fingerprint()},
+    digest.update(json.dumps({"kind": take.kind, "options": options, "code": code_fingerprint(take.kind)},
                              sort_keys=True).encode())
     if take.kind == RECORDING:
         _hash_file(digest, take.path)
@@ -96,13 +98,17 @@ def content_hash(take: Input, options: dict) -> str:
 
 
 @functools.cache
-def code_fingerprint() -> str:
-    """SHA-256 of the host's code (its Python modules, compiled bindings, the prior and the other
-    data files) as this process runs it: a take solved by other code is solved again."""
+def code_fingerprint(kind: str) -> str:
+    """SHA-256 of the code that solves a take of `kind` as this process runs it (the host's
+    modules, compiled bindings, prior and other data files; for videos also the detector's
+    modules and weights): a take solved by other code is solved again."""
+    roots = [(Path(__file__).resolve().parents[1], (".py", ".so", ".json")), (paths.HOST_DATA, (".py", ".json"))]
+    if kind == VIDEOS:
+        roots += [(Path(mocap_edge.__file__).parent, (".py",)), (resources.models_dir("blazepose"), (".onnx",))]
     digest = hashlib.sha256()
-    for root in (Path(__file__).resolve().parents[1], paths.HOST_DATA):
-        for path in sorted(p for p in root.rglob("*") if p.is_file() and p.suffix in (".py", ".so", ".json")
-                           and "__pycache__" not in p.parts):
+    for root, suffixes in roots:
+        for path in sorted(p for p in root.rglob("*") if p.is_file() and p.suffix in suffixes
+                           and not {"__pycache__", "node_modules"} & set(p.relative_to(root).parts)):
             digest.update(str(path.relative_to(root)).encode() + b"\0")
             _hash_file(digest, path)
     return digest.hexdigest()

@@ -14,6 +14,7 @@ from mocap import _core
 from mocap.errors import InputError
 from mocap.io import calib_qca, calib_toml
 from mocap.io.take_folder import LAYOUTS, TakeFolder, write_take
+from mocap_edge.detect.base import open_detector
 from mocap_edge.detect.video import detect_frames, open_tracker
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv")
@@ -65,8 +66,9 @@ def write_take_folder(trial: Path, out: Path) -> dict:
     calib = calibration(trial)
     rig = _rig_for(calib, [v.stem for v in files])
     tracker_layout, people, rates = None, [], set()
+    model = open_detector("blazepose", threads=THREADS)  # loaded once; a tracker per video holds its regions
     for video in files:
-        tracker = open_tracker("blazepose", MAX_PEOPLE, THREADS)
+        tracker = open_tracker(model, MAX_PEOPLE)
         frames = [(found, rate) for _, found, rate in detect_frames(video, tracker)]
         if not frames:
             raise InputError(f"{video}: no frame could be read")
