@@ -365,3 +365,14 @@ def test_the_live_calibrator_calibrates_during_the_take(tmp_path):
     assert sum(len(p.imus) + len(p.imus_distrusted) == 13 for p in poses) > 0.9 * (with_imus == 13).sum()
     calibrated = _core.Skeleton.load(str(studio.calibrated / "skeleton.json"))
     assert np.allclose(skeleton.offsets, calibrated.offsets, atol=1e-9)  # the BVH's skeleton: the latest
+
+
+def test_a_stage_of_many_cameras_fed_by_one_replay_has_every_frame_solved():
+    """`mocap bench --only stage`'s run, short: a recording of the edge's messages for 12
+    cameras replayed into mocapd as a take happening now; every frame comes back, each matched
+    to its frame of the take (the replay's restamping found), and close to the truth."""
+    from mocap.demo import stage
+
+    line = stage.bench(seconds=3.0, cameras=12)
+    assert line["cameras"] == 12 and line["frames"] == 180 and line["dropped"] == 0, line
+    assert line["joint_centres_pos_cm"] < 2.5, line

@@ -22,3 +22,14 @@ def test_the_scale_benchmark_solves_every_configuration_and_draws_it(shared, tmp
     assert result["imus"][0]["mean_joint_error_mm"] > result["imus"][13]["mean_joint_error_mm"]
     scale_plot.plot(result, tmp_path / "scale.png")
     assert (tmp_path / "scale.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_benchmark_length_or_camera_count_it_cannot_run_is_refused():
+    import subprocess
+    import sys
+
+    for args in (["--live-cameras", "8", "0"], ["--live-seconds", "nan"], ["--minutes", "-1"]):
+        out = subprocess.run([sys.executable, "-m", "mocap.cli", "bench", "--only", "live", *args],
+                             capture_output=True, text=True, timeout=60)
+        assert out.returncode == 2 and out.stderr.startswith(f"mocap bench: {args[0]}"), out.stderr
+        assert "Traceback" not in out.stderr

@@ -1,22 +1,23 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, monitor, edge, firmware, hub, peer, recording,
-drill; soak only when asked: it runs for minutes)."""
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, stage, monitor, edge, firmware, hub, peer,
+recording, drill, batch, scale; soak only when asked: it runs for minutes)."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 from mocap.batch import bench as batch_bench
-from mocap.demo import drill, monitor_bench, record_drill, soak
+from mocap.demo import drill, monitor_bench, record_drill, soak, stage
 from mocap.demo import score as live
-from mocap.errors import DataMissingError, MocapError
+from mocap.errors import DataMissingError, InputError, MocapError
 from mocap.eval import bench, edge_detector, peer, scale_plot
 from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill", "batch", "scale"]
+KINDS = ["solver", "live", "stage", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill", "batch", "scale"]
 ON_REQUEST = ["soak"]  # not in the default run: it lasts --minutes
 
 
@@ -28,6 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--pin-host", action="store_true", help="soak: mocapd alone on the last core, the studio's other "
                    "processes on the others (as systemd's CPUAffinity= on a deployed host)")
     b.add_argument("--live-seconds", type=float, default=60.0, help="length of the live benchmark's take")
+    b.add_argument("--live-cameras", type=int, nargs="+", default=[8], metavar="N",
+                   help="the live benchmark's camera counts, one line each (default 8)")
+    b.add_argument("--stage-cameras", type=int, default=32, metavar="N",
+                   help="cameras of the stage benchmark: the live host fed by one replay (default 32)")
     b.add_argument("--live-normal-priority", action="store_true",
                    help="run the live and soak benchmarks' mocapd without --realtime (to see what real-time "
                         "scheduling buys)")
@@ -43,9 +48,25 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.set_defaults(func=run)
 
 
+def _check(args: argparse.Namespace) -> None:
+    """Lengths and counts a benchmark can run with: finite, positive."""
+    lengths = {"--minutes": args.minutes, "--live-seconds": args.live_seconds, "--monitor-seconds": args.monitor_seconds}
+    for name, value in lengths.items():
+        if not math.isfinite(value) or value <= 0:
+            raise InputError(f"{name} must be a positive number of {name.split('-')[-1]}, not {value}")
+    if any(n < 1 for n in args.live_cameras):
+        raise InputError(f"--live-cameras: each count must be at least 1, not {args.live_cameras}")
+    if args.stage_cameras < 1:
+        raise InputError(f"--stage-cameras must be at least 1, not {args.stage_cameras}")
+
+
 def run(args: argparse.Namespace) -> int:
+    _check(args)
     if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
-        print(json.dumps(live.bench(seconds=args.live_seconds, realtime=not args.live_normal_priority)), flush=True)
+        for cameras in args.live_cameras:
+            print(json.dumps(live.bench(args.live_seconds, not args.live_normal_priority, cameras)), flush=True)
+    if "stage" in args.only:  # the live host before 32 cameras, fed by one replay process
+        print(json.dumps(stage.bench(args.live_seconds, args.stage_cameras, not args.live_normal_priority)), flush=True)
     if "monitor" in args.only:  # the live benchmark with the live view open in headless Chromium
         try:
             line = monitor_bench.bench(args.monitor_seconds, realtime=not args.live_normal_priority,

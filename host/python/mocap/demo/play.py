@@ -78,15 +78,15 @@ def _start_imu_hub(studio: Studio, start_ns: int, unplugged: tuple | None) -> li
     return [hub, nodes]  # stopped in this order: the hub never sees its bus go away
 
 
-def _calibrator_command(studio: Studio, duration: float) -> list[str]:
+def _calibrator_command(studio: Studio, duration: float, lead_s: float = LEAD_S) -> list[str]:
     """The live calibrator beside mocapd (`mocap calibrate --follow`)."""
     edge_endpoints = [studio.endpoints[c] for c in [*studio.camera_ids, "hub0"]]
     return [sys.executable, "-m", "mocap.cli", "calibrate", "--connect", *edge_endpoints,
             "--session", str(studio.session), "--out", str(studio.calibrated), "--follow",
-            "--publish", studio.calibrator, "--duration", f"{LEAD_S + duration + 1.0:.3f}"]
+            "--publish", studio.calibrator, "--duration", f"{lead_s + duration + 1.0:.3f}"]
 
 
-def recorder_command(studio: Studio, path: Path, duration: float) -> list[str]:
+def recorder_command(studio: Studio, path: Path, duration: float, lead_s: float = LEAD_S) -> list[str]:
     """`mocap record` of every stream (the edge boxes', the calibrator's, mocapd's poses and
     Health), with the session attached. A process of its
     own, as in a studio: a recorder thread in this process shared the interpreter with the
@@ -94,7 +94,7 @@ def recorder_command(studio: Studio, path: Path, duration: float) -> list[str]:
     waits — so the recording solved again dropped camera frames mocapd had used."""
     inputs = [*studio.endpoints.values(), *([studio.calibrator] if studio.calibrator else [])]
     return [sys.executable, "-m", "mocap.cli", "record", "--connect", *inputs, "--out", str(path),
-            "--session", str(studio.session), "--seconds", f"{LEAD_S + duration + 2.0:.3f}"]
+            "--session", str(studio.session), "--seconds", f"{lead_s + duration + 2.0:.3f}"]
 
 
 @dataclasses.dataclass
@@ -105,7 +105,7 @@ class Run:
     start_ns: int
 
 
-def _collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
+def collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
              on_pose: Callable | None) -> tuple[list, list]:
     """PoseFrame and Health messages from mocapd until it exits; each Health to progress,
     each PoseFrame to on_pose."""
@@ -134,29 +134,30 @@ def _collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
 
 
 def play(studio: Studio, progress: Callable | None = None, faults: dict | None = None, on_pose: Callable | None = None,
-         record: Path | None = None, realtime: bool = True) -> Run:
+         record: Path | None = None, realtime: bool = True, lead_s: float = LEAD_S) -> Run:
     """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
     loopback, until the take ends. progress(health) is called once a second; on_pose(pose)
     for every PoseFrame. faults: {"camera": (id, from_s, to_s), "imu": (id, from_s, to_s)}.
-    realtime: mocapd asks for SCHED_FIFO at REALTIME_PRIORITY."""
+    realtime: mocapd asks for SCHED_FIFO at REALTIME_PRIORITY; lead_s: between launching the
+    processes and the take's first frame."""
     if not MOCAPD.exists():
         raise InputError(f"{MOCAPD} is missing: run `make build`")
     faults = faults or {}
     duration = float(studio.frame_times[-1])
-    start_ns = time.time_ns() + int(LEAD_S * 1e9)
+    start_ns = time.time_ns() + int(lead_s * 1e9)
     priority = ["--realtime", str(REALTIME_PRIORITY)] if realtime else []
-    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{LEAD_S + duration + 1.5:.3f}",
+    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{lead_s + duration + 1.5:.3f}",
                              "--quiet", *priority], stdout=subprocess.PIPE, text=True)
     commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
     if studio.calibrator:
-        commands.append(_calibrator_command(studio, duration))
+        commands.append(_calibrator_command(studio, duration, lead_s))
     edge = [subprocess.Popen(cmd) for cmd in commands]
     edge += _start_imu_hub(studio, start_ns, faults.get("imu"))
-    recording = subprocess.Popen(recorder_command(studio, record, duration)) if record else None
+    recording = subprocess.Popen(recorder_command(studio, record, duration, lead_s)) if record else None
     keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:
-        poses, healths = _collect(host, sub, progress, on_pose)
+        poses, healths = collect(host, sub, progress, on_pose)
         lines = host.stdout.read().strip().splitlines()
         if host.wait() != 0 or not lines:
             raise InputError(f"mocapd stopped with status {host.returncode} (its log is above)")
