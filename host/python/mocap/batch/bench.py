@@ -14,7 +14,7 @@ from mocap.batch import inputs, runner, task
 from mocap.io.demo_data import BATCH_TRIALS, fetch_batch
 from mocap.sim import take_out
 
-SIMULATED = 4  # takes of the demo motion, seconds each below
+SIMULATED = 8  # takes of the demo motion, seconds each below: a batch is many takes (its fixed costs shared)
 SECONDS = 4.0
 
 
