@@ -55,7 +55,8 @@ std::vector<int> SquareAssignment(const Eigen::MatrixXd& a) {
 }  // namespace
 
 std::vector<int> AssignRows(const Eigen::MatrixXd& cost, double gate) {
-  if (!std::isfinite(gate) || gate < 0) throw std::invalid_argument("AssignRows: the gate must be finite and >= 0");
+  if (!std::isfinite(gate) || gate < 0)
+    throw std::invalid_argument("AssignRows: the gate must be finite and >= 0");
   const int rows = static_cast<int>(cost.rows()), cols = static_cast<int>(cost.cols());
   // Rows + columns square: a row pairs with a column, or with its own "alone" column at
   // gate / 2; a column likewise with its own "alone" row; the alone rows and columns pair

@@ -19,8 +19,8 @@ double Median(std::vector<double> v) {
 
 }  // namespace
 
-double GroupError(const Rig& rig, const std::vector<ViewPerson>& people, const std::vector<int>& members,
-                  const ViewGroupOptions& options) {
+double GroupError(const Rig& rig, const std::vector<ViewPerson>& people,
+                  const std::vector<int>& members, const ViewGroupOptions& options) {
   std::set<int> cameras;
   std::map<int, std::vector<Detection>> by_keypoint;
   for (int m : members) {
@@ -36,20 +36,23 @@ double GroupError(const Rig& rig, const std::vector<ViewPerson>& people, const s
     if (views.size() < 2 || !TriangulatePoint(rig, views, &x)) continue;
     for (const Detection& d : views) {
       Eigen::Vector2d px;
-      errors[d.camera].push_back(rig.cameras[d.camera].Project(x, &px) ? (px - d.pixel).norm() : INFINITY);
+      errors[d.camera].push_back(rig.cameras[d.camera].Project(x, &px) ? (px - d.pixel).norm()
+                                                                       : INFINITY);
     }
   }
   double worst = 0;
   for (int c : cameras) {
     const auto it = errors.find(c);
-    if (it == errors.end() || it->second.empty() || static_cast<int>(it->second.size()) < options.min_shared)
+    if (it == errors.end() || it->second.empty() ||
+        static_cast<int>(it->second.size()) < options.min_shared)
       return INFINITY;
     worst = std::max(worst, Median(it->second));
   }
   return worst;
 }
 
-std::vector<std::vector<int>> GroupAcrossViews(const Rig& rig, const std::vector<ViewPerson>& people,
+std::vector<std::vector<int>> GroupAcrossViews(const Rig& rig,
+                                               const std::vector<ViewPerson>& people,
                                                const ViewGroupOptions& options) {
   const int n = static_cast<int>(people.size());
   std::vector<std::tuple<double, int, int>> pairs;
@@ -74,7 +77,9 @@ std::vector<std::vector<int>> GroupAcrossViews(const Rig& rig, const std::vector
     }
     std::sort(merged.begin(), merged.end());
     if (GroupError(rig, people, merged, options) > options.max_error_px) continue;
-    const int into = group_of[i] >= 0 ? group_of[i] : group_of[j] >= 0 ? group_of[j] : static_cast<int>(groups.size());
+    const int into = group_of[i] >= 0   ? group_of[i]
+                     : group_of[j] >= 0 ? group_of[j]
+                                        : static_cast<int>(groups.size());
     if (into == static_cast<int>(groups.size())) groups.emplace_back();
     for (int p : merged) {
       if (group_of[p] >= 0 && group_of[p] != into) groups[group_of[p]].clear();

@@ -30,10 +30,13 @@ void Views(const testing::Scene& scene, const std::vector<Eigen::VectorXd>& pose
       for (size_t k = 0; k < view.keypoints.size(); ++k) {
         const Keypoint2D& kp = view.keypoints[k];
         if (kp.confidence <= 0) continue;
-        person.keypoints.push_back(
-            {view.camera, static_cast<int>(k), {kp.x + noise(*rng), kp.y + noise(*rng)}, kp.confidence});
+        person.keypoints.push_back({view.camera,
+                                    static_cast<int>(k),
+                                    {kp.x + noise(*rng), kp.y + noise(*rng)},
+                                    kp.confidence});
       }
-      if (person.keypoints.size() >= 6) people->push_back(person), who->push_back(static_cast<int>(p));
+      if (person.keypoints.size() >= 6)
+        people->push_back(person), who->push_back(static_cast<int>(p));
     }
   }
   std::vector<int> order(people->size());  // shuffled: no camera lists people by performer
@@ -47,7 +50,8 @@ void Views(const testing::Scene& scene, const std::vector<Eigen::VectorXd>& pose
 
 std::vector<Eigen::VectorXd> Performers(const testing::Scene& scene, std::mt19937* rng) {
   std::vector<Eigen::VectorXd> poses;
-  for (const Eigen::Vector2d& at : {Eigen::Vector2d(-1.0, 0.0), Eigen::Vector2d(0.2, 1.0), Eigen::Vector2d(0.8, -0.9)}) {
+  for (const Eigen::Vector2d& at :
+       {Eigen::Vector2d(-1.0, 0.0), Eigen::Vector2d(0.2, 1.0), Eigen::Vector2d(0.8, -0.9)}) {
     Eigen::VectorXd theta = RandomPose(scene.skeleton, rng, 0.3);
     theta.head<2>() = at;
     poses.push_back(theta);
@@ -67,7 +71,8 @@ TEST(GroupAcrossViews, EachPerformersViewsMakeOneGroupWhateverTheCamerasOrder) {
     std::vector<bool> seen(3, false);
     for (const std::vector<int>& g : groups) {
       for (int i : g) EXPECT_EQ(who[i], who[g[0]]) << "a view of another performer joined";
-      EXPECT_EQ(static_cast<int>(g.size()), static_cast<int>(std::count(who.begin(), who.end(), who[g[0]])));
+      EXPECT_EQ(static_cast<int>(g.size()),
+                static_cast<int>(std::count(who.begin(), who.end(), who[g[0]])));
       EXPECT_FALSE(seen[who[g[0]]]);
       seen[who[g[0]]] = true;
       EXPECT_LT(GroupError(scene.rig, people, g, {}), noise_px + 1.0);

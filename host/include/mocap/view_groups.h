@@ -30,13 +30,14 @@ struct ViewGroupOptions {
 // The median reprojection error (pixels) of the worst view of `members` (indices into
 // people) after triangulating every keypoint that two or more of them see; infinite when two
 // members share a camera or a member has fewer than options.min_shared such keypoints.
-double GroupError(const Rig& rig, const std::vector<ViewPerson>& people, const std::vector<int>& members,
-                  const ViewGroupOptions& options);
+double GroupError(const Rig& rig, const std::vector<ViewPerson>& people,
+                  const std::vector<int>& members, const ViewGroupOptions& options);
 
 // Groups (indices into people, ascending) of two or more views each whose GroupError is at
 // most options.max_error_px; every person in at most one group. Greedy: pairs taken from the
 // most consistent, a pair joining or merging groups only when the result stays consistent.
-std::vector<std::vector<int>> GroupAcrossViews(const Rig& rig, const std::vector<ViewPerson>& people,
+std::vector<std::vector<int>> GroupAcrossViews(const Rig& rig,
+                                               const std::vector<ViewPerson>& people,
                                                const ViewGroupOptions& options = {});
 
 }  // namespace mocap
