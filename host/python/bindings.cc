@@ -67,4 +67,5 @@ PYBIND11_MODULE(_core, m) {
   BindCalibration(m);
   BindPipeline(m);
   BindInput(m);
+  BindTracker(m);
 }

@@ -40,6 +40,7 @@ void BindSolver(py::module_& m);       // PosePrior, SolveResult, Solver
 void BindCalibration(py::module_& m);  // CalibrationResult, calibrate_window
 void BindPipeline(py::module_& m);     // HostPipeline
 void BindInput(py::module_& m);        // InputPath, SyncedFrame
+void BindTracker(py::module_& m);      // TrackerOptions, SubjectFrame, SubjectTracker
 
 }  // namespace mocap::bindings
 

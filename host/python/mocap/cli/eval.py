@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mocap import paths
 from mocap.errors import InputError
-from mocap.eval import simulated, tables, tables_heading, take_truth
+from mocap.eval import people, simulated, tables, tables_heading, take_truth
 from mocap.sim import detector, extremes, take
 
 PRESETS = ["hq13", "hs13", "hq6", "hs6"]
@@ -17,7 +17,12 @@ PRESETS = ["hq13", "hs13", "hq6", "hs6"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     e = sub.add_parser("eval", help="simulate takes of real motion, solve them and score the solver")
-    e.add_argument("--motion", help="BVH file or folder of BVH files (searched recursively)")
+    e.add_argument("--motion", action="append", default=[],
+                   help="BVH file or folder of BVH files (searched recursively); repeatable")
+    e.add_argument("--people", type=int, default=None, metavar="N",
+                   help="instead: one scene of N performers playing the --motion clips (in turn; a clip used "
+                        "again starts elsewhere in it), tracked and solved together from video (--seconds long, "
+                        "default 8), each also solved alone; identity swaps and errors per performer to --json")
     e.add_argument("--take", metavar="DIR",
                    help="instead: a take folder of `mocap simulate`, solved as `mocap solve --take` solves it "
                         "(into --out) and scored against the truth beside it")
@@ -51,14 +56,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--table", choices=["paper", "heading"],
                    help="paper: regenerate the paper's tables and plots on the test clips; heading: print the "
                         "heading tracking's table (a long take of the demo motion, --seconds)")
-    e.add_argument("--seconds", type=float, default=60.0, help="length of the --table heading take (default 60)")
+    e.add_argument("--seconds", type=float, default=None,
+                   help="length of the --table heading take (default 60) or of the --people scene (default 8)")
     e.add_argument("--docs", default=str(paths.REPO / "docs"), help="where --table writes results.md (default docs/)")
     e.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     if args.table == "heading":
-        print(tables_heading.markdown(tables_heading.rows(args.seconds), args.seconds), end="", flush=True)
+        seconds = args.seconds or 60.0
+        print(tables_heading.markdown(tables_heading.rows(seconds), seconds), end="", flush=True)
         return 0
     if args.table:
         summary = tables.write(args.seed, Path(args.docs), f"mocap eval --table paper --seed {args.seed}")
@@ -68,8 +75,12 @@ def run(args: argparse.Namespace) -> int:
         return _take(args)
     if not args.motion or not args.json:
         raise InputError("--motion (or --take) and --json are needed unless --table is given")
-    motion = Path(args.motion)
-    clips = sorted(motion.rglob("*.bvh")) if motion.is_dir() else [motion]
+    clips = [c for m in map(Path, args.motion) for c in (sorted(m.rglob("*.bvh")) if m.is_dir() else [m])]
+    missing = [str(c) for c in clips if not c.is_file()]
+    if missing or not clips:
+        raise InputError(f"no such BVH file: {', '.join(missing) or ' '.join(args.motion)}")
+    if args.people is not None:
+        return _people(args, clips)
     bends, slips = tuple(map(extremes.Bend.parse, args.bend)), tuple(map(extremes.Slip.parse, args.slip))
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"),
@@ -94,4 +105,17 @@ def _take(args: argparse.Namespace) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "per_bone"}), flush=True)
+    return 0
+
+
+def _people(args: argparse.Namespace, clips: list[Path]) -> int:
+    if args.people < 1 or args.people > 8:
+        raise InputError(f"--people must be 1 to 8, not {args.people}")
+    config = take.Config(preset=args.preset, cameras=args.cameras,
+                         detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
+    result = people.evaluate(clips, args.people, args.seconds or 8.0, config, args.seed)
+    Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+    print(json.dumps({k: v for k, v in result.items() if k not in ("performers", "tracker")}), flush=True)
+    for r in result["performers"]:
+        print(json.dumps(r), flush=True)
     return 0

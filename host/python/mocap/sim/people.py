@@ -88,12 +88,17 @@ def _performers(clips: list[Path], people: int, seconds: float, config: Config, 
     return out
 
 
-def simulate(clips: list[Path], people: int, seconds: float, config: Config, rng: np.random.Generator) -> Scene:
+def simulate(clips: list[Path], people: int, seconds: float, config: Config, rng: np.random.Generator,
+             alone: int | None = None) -> Scene:
     """A scene of `people` performers playing `clips` for `seconds` (less when the clips are
     shorter) before config's cameras (the preset's count or config.cameras, on a ring
-    RING_MARGIN_M beyond the farthest performer), each with config's suit and errors."""
+    RING_MARGIN_M beyond the farthest performer), each with config's suit and errors.
+    alone: only that performer on the stage (the same place, suit and cameras as in the
+    scene of all), to compare with."""
     if people < 1 or not clips:
         raise ValueError(f"a scene needs a clip and at least one performer, not {len(clips)} clips for {people}")
+    if alone is not None and not 0 <= alone < people:
+        raise ValueError(f"performer {alone} is not one of the {people}")
     chosen = _performers(clips, people, seconds, config, rng)
     suits = [performer(skeleton, config, rng) for skeleton, _, _, _ in chosen]
     roots = np.concatenate([m[:, :3] for _, m, _, _ in chosen])
@@ -102,6 +107,8 @@ def simulate(clips: list[Path], people: int, seconds: float, config: Config, rng
     true_rig = camera_rig(n_cameras, roots, radius=max(4.5, reach + RING_MARGIN_M))
     told_rig = perturbed_rig(camera_rig(n_cameras, roots, radius=max(4.5, reach + RING_MARGIN_M)),
                              config.camera_rotation_deg, config.camera_shift_m, rng)
+    if alone is not None:
+        chosen, suits = [chosen[alone]], [suits[alone]]
     dt = chosen[0][2]
     true_times, times = frame_times(len(chosen[0][1]), dt, config, rng)
     persons, who, own = _detections(chosen, suits, true_rig, config, rng)
