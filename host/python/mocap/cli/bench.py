@@ -1,4 +1,4 @@
-"""`mocap bench`: benchmarks, one JSON object per line (solver, live, stage, monitor, edge, firmware, hub, peer,
+"""`mocap bench`: benchmarks, one JSON object per line (solver, live, stage, multi, monitor, edge, firmware, hub, peer,
 recording, drill, batch, scale; soak only when asked: it runs for minutes)."""
 
 from __future__ import annotations
@@ -12,12 +12,13 @@ from mocap.batch import bench as batch_bench
 from mocap.demo import drill, monitor_bench, record_drill, soak, stage
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, InputError, MocapError
-from mocap.eval import bench, edge_detector, peer, scale_plot
+from mocap.eval import bench, edge_detector, peer, people, scale_plot
 from mocap.imu_node import bench as firmware_bench
 from mocap.io.demo_data import fetch_trial
 from mocap_edge.hub import bench as hub_bench
 
-KINDS = ["solver", "live", "stage", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill", "batch", "scale"]
+KINDS = ["solver", "live", "stage", "multi", "monitor", "edge", "firmware", "hub", "peer", "recording", "drill", "batch",
+         "scale"]
 ON_REQUEST = ["soak"]  # not in the default run: it lasts --minutes
 
 
@@ -60,20 +61,26 @@ def _check(args: argparse.Namespace) -> None:
         raise InputError(f"--stage-cameras must be at least 1, not {args.stage_cameras}")
 
 
-def run(args: argparse.Namespace) -> int:
-    _check(args)
+def _line(name: str, measure, missing=DataMissingError) -> None:
+    """Prints measure()'s figures, or that the benchmark was skipped as its data is missing."""
+    try:
+        print(json.dumps(measure()), flush=True)
+    except missing as e:
+        print(json.dumps({"bench": name, "skipped": str(e)}), flush=True)
+
+
+def _whole_machine(args: argparse.Namespace) -> None:
+    """The benchmarks of processes and threads that get both cores."""
     if "live" in args.only:  # before pinning: the edge processes and mocapd get the whole machine
         for cameras in args.live_cameras:
             print(json.dumps(live.bench(args.live_seconds, not args.live_normal_priority, cameras)), flush=True)
     if "stage" in args.only:  # the live host before 32 cameras, fed by one replay process
         print(json.dumps(stage.bench(args.live_seconds, args.stage_cameras, not args.live_normal_priority)), flush=True)
+    if "multi" in args.only:  # the host's solve of 3 people, per frame, on both cores and on one
+        _line("multi", lambda: people.bench(seed=args.seed))
     if "monitor" in args.only:  # the live benchmark with the live view open in headless Chromium
-        try:
-            line = monitor_bench.bench(args.monitor_seconds, realtime=not args.live_normal_priority,
-                                       screenshot=Path(args.screenshot) if args.screenshot else None)
-        except DataMissingError as e:
-            line = {"bench": "monitor", "skipped": str(e)}
-        print(json.dumps(line), flush=True)
+        _line("monitor", lambda: monitor_bench.bench(args.monitor_seconds, realtime=not args.live_normal_priority,
+                                                     screenshot=Path(args.screenshot) if args.screenshot else None))
     if "recording" in args.only:  # the recorder killed mid-take: what its file keeps
         print(json.dumps(record_drill.bench()), flush=True)
     if "drill" in args.only:  # camera box, IMU hub and mocapd killed, a box's clock stepped, mid-take
@@ -83,37 +90,30 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(soak.bench(args.minutes, realtime=not args.live_normal_priority, pin_host=args.pin_host)),
               flush=True)
     if "batch" in args.only:  # the same takes serially and on a LocalCluster of two workers (both cores)
-        try:
-            print(json.dumps(batch_bench.bench()), flush=True)
-        except DataMissingError as e:
-            print(json.dumps({"bench": "batch", "skipped": str(e)}), flush=True)
+        _line("batch", batch_bench.bench)
     if "edge" in args.only:
-        try:
-            print(json.dumps(edge_detector.bench(fetch_trial())), flush=True)
-        except DataMissingError as e:
-            print(json.dumps({"bench": "edge", "skipped": str(e)}), flush=True)
+        _line("edge", lambda: edge_detector.bench(fetch_trial()))
     if "firmware" in args.only:
         print(json.dumps(firmware_bench.firmware()), flush=True)
+
+
+def _scale(args: argparse.Namespace) -> dict:
+    result = bench.scale(rate=args.rate, seed=args.seed, repeats=args.repeats)
+    if args.plot:
+        scale_plot.plot(result, Path(args.plot))
+    return result
+
+
+def run(args: argparse.Namespace) -> int:
+    _check(args)
+    _whole_machine(args)
     bench.pin_to_one_core()
     if "hub" in args.only:  # frames decoded per second on one core
         print(json.dumps(hub_bench.hub()), flush=True)
     if "solver" in args.only:
-        try:
-            result = bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats, settings=args.set)
-            print(json.dumps(result), flush=True)
-        except DataMissingError as e:
-            print(json.dumps({"bench": "solver", "skipped": str(e)}), flush=True)
+        _line("solver", lambda: bench.solver(rate=args.rate, seed=args.seed, repeats=args.repeats, settings=args.set))
     if "scale" in args.only:  # the solve's cost against cameras (1-32), IMUs and keypoints, on this core
-        try:
-            result = bench.scale(rate=args.rate, seed=args.seed, repeats=args.repeats)
-            if args.plot:
-                scale_plot.plot(result, Path(args.plot))
-            print(json.dumps(result), flush=True)
-        except DataMissingError as e:
-            print(json.dumps({"bench": "scale", "skipped": str(e)}), flush=True)
+        _line("scale", lambda: _scale(args))
     if "peer" in args.only:  # ours against Pose2Sim's triangulation, both on this core
-        try:
-            print(json.dumps(peer.bench(repeats=args.repeats)), flush=True)
-        except MocapError as e:  # the trial is missing or cannot be read: the other lines stand
-            print(json.dumps({"bench": "peer", "skipped": str(e)}), flush=True)
+        _line("peer", lambda: peer.bench(repeats=args.repeats), MocapError)  # the trial missing or unreadable
     return 0

@@ -14,6 +14,7 @@ are the times the subject matched to it changes id.
 from __future__ import annotations
 
 import itertools
+import time as _time
 from pathlib import Path
 
 import numpy as np
@@ -34,18 +35,22 @@ def nominal(layout_name: str) -> tuple[_core.Skeleton, _core.KeypointLayout]:
     return skeleton, layout
 
 
-def track(scene: sim_people.Scene, options: _core.SolverOptions | None = None,
-          tracking: _core.TrackerOptions | None = None) -> tuple[list[dict], dict]:
-    """Per frame the subjects tracked ({id: (theta, cameras)}), and the tracker's counts."""
+def track(scene: sim_people.Scene, tracking: _core.TrackerOptions | None = None,
+          wall_ms: list | None = None) -> tuple[list[dict], dict]:
+    """Per frame the subjects tracked ({id: (theta, cameras)}), and the tracker's counts;
+    wall_ms, when given, receives each frame's SubjectTracker.track time."""
     first = scene.performers[0]
     skeleton, layout = nominal(first.layout.name)
-    tracker = _core.SubjectTracker(skeleton, first.rig, layout, pose_prior.load(), options or _core.SolverOptions(),
+    tracker = _core.SubjectTracker(skeleton, first.rig, layout, pose_prior.load(), _core.SolverOptions(),
                                    tracking or _core.TrackerOptions())
     frames = []
     for time, seen in zip(first.times, scene.persons):
         cameras = [c for c, people in enumerate(seen or []) for _ in people]
         keypoints = np.array([p for people in (seen or []) for p in people]).reshape(len(cameras), len(layout), 3)
+        start = _time.perf_counter()
         subjects, _ = tracker.track(float(time), cameras, keypoints)
+        if wall_ms is not None:
+            wall_ms.append(1e3 * (_time.perf_counter() - start))
         frames.append({s.id: (np.array(s.result.theta), list(s.cameras)) for s in subjects})
     return frames, tracker.counts
 
@@ -119,3 +124,28 @@ def evaluate(clips: list[Path], people: int, seconds: float, config: Config, see
             "frames": len(frames), "closest_approach_m": closest_approach(scene),
             "identity_swaps": sum(r["identity_swaps"] for r in together),
             "subjects_born": counts["births"], "tracker": counts, "performers": together}
+
+
+BENCH_CLIPS = ("cmu-131/131_01.bvh", "cmu-131/131_02.bvh", "cmu-131/131_03.bvh")  # test split, 8-10 s each
+
+
+def bench(seconds: float = 8.0, seed: int = 0) -> dict:
+    """`make bench`'s multi line: the host's solve of 3 people seen by 8 cameras (the
+    SubjectTracker's whole frame: assignment, births, the solves) per frame, wall time, with
+    the solves on both cores and on one."""
+    clips = [paths.shared_file(f"data/mocap/{c}") for c in BENCH_CLIPS]
+    scene = sim_people.simulate(clips, 3, seconds, Config(preset="hq13"), np.random.default_rng(seed))
+    out = {"bench": "multi", "people": 3, "cameras": len(scene.performers[0].rig.cameras),
+           "frames": len(scene.persons)}
+    for threads in (2, 1):
+        tracking = _core.TrackerOptions()
+        tracking.threads = threads
+        ms: list[float] = []
+        frames, counts = track(scene, tracking, ms)
+        tracked = np.array(ms[len(ms) // 10:])  # the subjects are born in the first frames
+        key = f"threads_{threads}"
+        out[key] = {"p50_ms": round(float(np.median(tracked)), 3), "p99_ms": round(float(np.percentile(tracked, 99)), 3),
+                    "max_ms": round(float(tracked.max()), 3), "subjects_born": counts["births"],
+                    "identity_swaps": sum(r["identity_swaps"] for r in score(scene, frames))}
+    out["target_p99_ms"] = 10.0
+    return out
