@@ -13,16 +13,6 @@
 
 namespace mocap {
 
-struct SubjectTracker::Subject {
-  uint32_t id = 0;
-  std::unique_ptr<Solver> solver;
-  double last_seen = 0;
-  Eigen::Vector3d last_root{0, 0, 0};
-  std::vector<int> views;  // indices into this frame's people
-  SolveResult result;
-  bool born = false;
-};
-
 namespace {
 
 double Median(std::vector<double> v) {
@@ -115,25 +105,37 @@ bool TrackerOptions::IsValid(std::string* error) const {
   return true;
 }
 
-SubjectTracker::SubjectTracker(SolverFactory make_solver, TrackerOptions options)
-    : make_solver_(std::move(make_solver)), options_(options) {
+SubjectTracker::SubjectTracker(SolverFactory make_solver, TrackerOptions options,
+                               std::vector<SuitCalibration> suits)
+    : make_solver_(std::move(make_solver)),
+      options_(options),
+      suits_(std::move(suits)),
+      matcher_(SuitBones(suits_), options.suits) {
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument("TrackerOptions: " + error);
   if (!make_solver_) throw std::invalid_argument("SubjectTracker needs a solver factory");
   reference_ = make_solver_();
   if (!reference_) throw std::invalid_argument("SubjectTracker: the solver factory made no solver");
+  for (size_t k = 0; k < suits_.size(); ++k)
+    if (!reference_->CheckCalibration(suits_[k].skeleton, suits_[k].layout, suits_[k].imus, &error))
+      throw std::invalid_argument("suit " + std::to_string(k) + ": " + error);
 }
 
 SubjectTracker::~SubjectTracker() = default;
 
-std::vector<SubjectFrame> SubjectTracker::Track(double timestamp,
-                                                const std::vector<CameraObservation>& people,
-                                                std::vector<uint32_t>* assigned) {
+std::vector<SubjectFrame> SubjectTracker::Track(
+    double timestamp, const std::vector<CameraObservation>& people, std::vector<uint32_t>* assigned,
+    const std::vector<std::vector<ImuObservation>>& suits) {
+  if (!suits.empty() && suits.size() != suits_.size())
+    throw std::invalid_argument("SubjectTracker::Track: readings of " +
+                                std::to_string(suits.size()) + " suits, not " +
+                                std::to_string(suits_.size()));
   const std::vector<int> admitted = Admit(people);
   std::vector<int> owner(people.size(), -1);
   Assign(people, admitted, &owner);
-  SolveAll(timestamp, people);
+  SolveAll(timestamp, people, suits);
   Births(timestamp, people, admitted, &owner);
+  if (!suits_.empty()) MatchSuits(timestamp, suits);
   Retire(timestamp);
   if (assigned) {
     assigned->assign(people.size(), 0);
@@ -144,7 +146,7 @@ std::vector<SubjectFrame> SubjectTracker::Track(double timestamp,
   for (const auto& s : subjects_) {
     std::vector<int> cameras;
     for (int p : s->views) cameras.push_back(people[p].camera);
-    out.push_back({s->id, s->result, cameras, s->born});
+    out.push_back({s->id, s->result, cameras, s->born, s->solved_with});
   }
   return out;
 }
@@ -212,9 +214,13 @@ void SubjectTracker::Assign(const std::vector<CameraObservation>& people,
   }
 }
 
-void SubjectTracker::SolveAll(double timestamp, const std::vector<CameraObservation>& people) {
+void SubjectTracker::SolveAll(double timestamp, const std::vector<CameraObservation>& people,
+                              const std::vector<std::vector<ImuObservation>>& suits) {
   auto solve = [&](Subject& s) {
-    if (s.views.empty()) {  // nobody to solve from: the last pose is held
+    const bool readings = s.suit >= 0 && !suits.empty() && !suits[s.suit].empty();
+    s.solved = !s.views.empty() || readings;
+    s.solved_with = readings ? s.suit : -1;
+    if (!s.solved) {  // nobody to solve from: the last pose is held
       s.result = SolveResult{};
       s.result.status = SolveStatus::kNoObservations;
       s.result.theta = s.solver->pose();
@@ -225,7 +231,9 @@ void SubjectTracker::SolveAll(double timestamp, const std::vector<CameraObservat
     FrameObservations frame;
     frame.timestamp = timestamp;
     for (int p : s.views) frame.cameras.push_back(people[p]);
+    if (readings) frame.imus = suits[s.suit];
     s.result = s.solver->Solve(frame);
+    if (s.views.empty()) return;  // seen by its suit only
     s.last_seen = timestamp;
     s.last_root = s.result.theta.head<3>();
   };
@@ -322,7 +330,9 @@ int SubjectTracker::Claim(const Eigen::Vector3d& centre, double timestamp,
     lost = tracked() - 1;
   }
   Subject& s = *subjects_[lost];
-  s.solver = std::move(solver), s.result = result, s.views = members;
+  s.solver = std::move(solver), s.result = result, s.views = members, s.suit = -1,
+  s.solved_with = -1;
+  s.solved = true;
   s.last_seen = timestamp, s.last_root = result.theta.head<3>();
   return lost;
 }

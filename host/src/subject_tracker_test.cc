@@ -206,5 +206,17 @@ TEST(SubjectTracker, BadViewsAreCountedAndDroppedAndACrowdIsCapped) {
   EXPECT_THROW(SubjectTracker(Factory(scene), options), std::invalid_argument);
 }
 
+TEST(SubjectTracker, SuitsThatDoNotFitOrReadingsOfTooFewSuitsAreRefused) {
+  const testing::Scene scene = MakeScene(4);
+  SuitCalibration suit{scene.skeleton, scene.layout, scene.imus};
+  SubjectTracker tracker(Factory(scene), TrackerOptions{}, {suit, suit});
+  EXPECT_EQ(tracker.wearers(), (std::vector<uint32_t>{0, 0}));
+  EXPECT_THROW(tracker.Track(0.0, {}, nullptr, {{}}), std::invalid_argument);  // one of two
+  EXPECT_NO_THROW(tracker.Track(0.0, {}, nullptr, {{}, {}}));                  // none read
+  SuitCalibration misfit = suit;
+  misfit.imus[0].bone = 99;  // no such bone
+  EXPECT_THROW(SubjectTracker(Factory(scene), TrackerOptions{}, {misfit}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace mocap

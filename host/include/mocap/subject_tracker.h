@@ -11,6 +11,11 @@
 //     new subject, or a lost one found again when it stands where that one was last seen.
 //  4. Losses: a subject no camera has assigned a person to for retire_s is retired; its id is
 //     never used again.
+//  5. Suits: which subject wears which suit of IMUs is found from motion (SuitMatcher); a
+//     subject wearing one is solved with the suit's calibration (its skeleton, layout and
+//     IMU sites) and readings from the next frame on, the others from video alone. A suit
+//     whose readings the keypoints contradict (half its sensors distrusted by the solver's
+//     slip monitor: a suit on another person than decided) is taken off and decided again.
 #ifndef MOCAP_SUBJECT_TRACKER_H_
 #define MOCAP_SUBJECT_TRACKER_H_
 
@@ -21,6 +26,7 @@
 #include <vector>
 
 #include "mocap/solver.h"
+#include "mocap/suit_matcher.h"
 #include "mocap/view_groups.h"
 
 namespace mocap {
@@ -40,6 +46,7 @@ struct TrackerOptions {
   double min_confidence = 0.0;     // keypoints at or below are not detected
   int threads = 2;                 // solves in parallel (1: one after the other)
   ViewGroupOptions grouping;
+  SuitMatchOptions suits;
   bool IsValid(std::string* error) const;
 };
 
@@ -48,6 +55,15 @@ struct SubjectFrame {
   SolveResult result;
   std::vector<int> cameras;  // the views assigned to it this frame
   bool born = false;         // this frame is its first
+  int suit = -1;             // the suit whose readings this frame's solve had, -1 for none
+};
+
+// A suit of IMUs and the calibration of its wearer: the skeleton, the keypoint layout on it,
+// and the suit's IMU sites (mounting, position, heading reference) on that skeleton.
+struct SuitCalibration {
+  Skeleton skeleton;
+  KeypointLayout layout;
+  std::vector<ImuSite> imus;
 };
 
 struct TrackerCounts {
@@ -57,6 +73,10 @@ struct TrackerCounts {
   uint64_t people_dropped = 0;     // over max_people_per_camera, or too few keypoints
   uint64_t births_refused = 0;     // over max_subjects
   uint64_t views_unexplained = 0;  // people neither assigned nor in a group being born
+  uint64_t suit_changes = 0;       // suits found on someone else than their last wearer
+  // A suit taken off its wearer as the keypoints contradict half its sensors or more (the
+  // solver's slip monitor): decided again from motion, the wearer solved from video meanwhile.
+  uint64_t suits_doubted = 0;
 };
 
 class SubjectTracker {
@@ -64,7 +84,10 @@ class SubjectTracker {
   // A new solver for a subject being born (the session's skeleton, rig and layout).
   using SolverFactory = std::function<std::unique_ptr<Solver>()>;
 
-  SubjectTracker(SolverFactory make_solver, TrackerOptions options);
+  // suits: the suits that may be worn (none: video only); every calibration must fit the
+  // factory's solvers (Solver::CheckCalibration), else std::invalid_argument.
+  SubjectTracker(SolverFactory make_solver, TrackerOptions options,
+                 std::vector<SuitCalibration> suits = {});
   ~SubjectTracker();
 
   // One frame: `people` holds every person every camera found (CameraObservation::camera
@@ -72,14 +95,28 @@ class SubjectTracker {
   // subject tracked after the frame, by id. *assigned (may be null): per entry of `people`,
   // the id of the subject it was assigned or born into, 0 for none.
   std::vector<SubjectFrame> Track(double timestamp, const std::vector<CameraObservation>& people,
-                                  std::vector<uint32_t>* assigned = nullptr);
+                                  std::vector<uint32_t>* assigned = nullptr,
+                                  const std::vector<std::vector<ImuObservation>>& suits = {});
+  // Per suit: the id of the subject wearing it, 0 for none.
+  const std::vector<uint32_t>& wearers() const { return matcher_.wearers(); }
 
   const TrackerCounts& counts() const { return counts_; }
   int tracked() const { return static_cast<int>(subjects_.size()); }
   const TrackerOptions& options() const { return options_; }
 
  private:
-  struct Subject;
+  struct Subject {
+    uint32_t id = 0;
+    std::unique_ptr<Solver> solver;
+    double last_seen = 0;
+    Eigen::Vector3d last_root{0, 0, 0};
+    std::vector<int> views;  // indices into this frame's people
+    SolveResult result;
+    bool born = false;
+    int suit = -1;         // the suit it is solved with
+    int solved_with = -1;  // the suit this frame's solve had
+    bool solved = false;   // this frame
+  };
   struct Candidate {
     Eigen::Vector3d centre;
     int frames = 0;
@@ -88,7 +125,11 @@ class SubjectTracker {
   std::vector<int> Admit(const std::vector<CameraObservation>& people);
   void Assign(const std::vector<CameraObservation>& people, const std::vector<int>& admitted,
               std::vector<int>* owner);
-  void SolveAll(double timestamp, const std::vector<CameraObservation>& people);
+  void SolveAll(double timestamp, const std::vector<CameraObservation>& people,
+                const std::vector<std::vector<ImuObservation>>& suits);
+  void MatchSuits(double timestamp, const std::vector<std::vector<ImuObservation>>& suits);
+  void Dress(Subject* subject, int suit);
+  static std::vector<std::vector<int>> SuitBones(const std::vector<SuitCalibration>& suits);
   void Births(double timestamp, const std::vector<CameraObservation>& people,
               const std::vector<int>& admitted, std::vector<int>* owner);
   bool NearSeenSubject(const Eigen::Vector3d& centre, double timestamp) const;
@@ -99,6 +140,8 @@ class SubjectTracker {
   SolverFactory make_solver_;
   TrackerOptions options_;
   std::unique_ptr<Solver> reference_;  // the factory's first solver: the rig and layout
+  std::vector<SuitCalibration> suits_;
+  SuitMatcher matcher_;
   std::vector<std::unique_ptr<Subject>> subjects_;
   std::vector<Candidate> candidates_;
   uint32_t next_id_ = 1;

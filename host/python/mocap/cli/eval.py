@@ -23,6 +23,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="instead: one scene of N performers playing the --motion clips (in turn; a clip used "
                         "again starts elsewhere in it), tracked and solved together from video (--seconds long, "
                         "default 8), each also solved alone; identity swaps and errors per performer to --json")
+    e.add_argument("--no-suits", action="store_true", help="--people: video only (default: each wears a suit of "
+                   "13 IMUs calibrated on them, which the tracker finds on them from motion)")
+    e.add_argument("--swap-suits-at", type=float, default=None, metavar="S",
+                   help="--people: performers 1 and 2 swap suits S seconds into the scene")
     e.add_argument("--take", metavar="DIR",
                    help="instead: a take folder of `mocap simulate`, solved as `mocap solve --take` solves it "
                         "(into --out) and scored against the truth beside it")
@@ -111,9 +115,12 @@ def _take(args: argparse.Namespace) -> int:
 def _people(args: argparse.Namespace, clips: list[Path]) -> int:
     if args.people < 1 or args.people > 8:
         raise InputError(f"--people must be 1 to 8, not {args.people}")
+    if args.swap_suits_at is not None and (args.people < 2 or args.no_suits or not args.swap_suits_at >= 0):
+        raise InputError("--swap-suits-at needs two or more people in suits and a time >= 0")
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"))
-    result = people.evaluate(clips, args.people, args.seconds or 8.0, config, args.seed)
+    result = people.evaluate(clips, args.people, args.seconds or 8.0, config, args.seed, suits=not args.no_suits,
+                             swap_suits_at_s=args.swap_suits_at)
     Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k not in ("performers", "tracker")}), flush=True)
     for r in result["performers"]:

@@ -3,9 +3,11 @@ SubjectTracker from every camera's people, in the order each camera lists them, 
 per performer against the truth; each performer is also solved alone (the same clip, place,
 suit and cameras, nobody else on the stage) to compare with.
 
-Video only: every subject is solved with the default skeleton and the layout on it (which
-subject wears which suit is not decided yet), alone as together; errors are over the 13
-anatomical joint centres (mocap.model.joint_centres), which every skeleton agrees on.
+Each performer wears a suit of IMUs of their own, calibrated (the oracle calibration: their
+skeleton, the layout on it, the sensors' true sites), which the tracker finds on them from
+motion; until then, or without suits (`suits=False`), a subject is solved from video with the
+default skeleton and the layout on it. Errors are over the 13 anatomical joint centres
+(mocap.model.joint_centres), which every skeleton agrees on.
 Scoring, per frame: the subjects tracked are matched to the performers by the least total
 mean joint-centre distance, a pair made only within MATCH_M; a performer's identity swaps
 are the times the subject matched to it changes id.
@@ -35,23 +37,40 @@ def nominal(layout_name: str) -> tuple[_core.Skeleton, _core.KeypointLayout]:
     return skeleton, layout
 
 
-def track(scene: sim_people.Scene, tracking: _core.TrackerOptions | None = None,
-          wall_ms: list | None = None) -> tuple[list[dict], dict]:
-    """Per frame the subjects tracked ({id: (theta, cameras)}), and the tracker's counts;
-    wall_ms, when given, receives each frame's SubjectTracker.track time."""
+def worn_by(scene: sim_people.Scene, swap_at_s: float | None = None) -> np.ndarray:
+    """(F, performers): who wears each suit on each frame: its own performer, except that
+    performers 0 and 1 wear each other's from swap_at_s (s into the scene) on."""
+    t = scene.performers[0].times - scene.performers[0].times[0]
+    out = np.tile(np.arange(len(scene.performers)), (len(t), 1))
+    if swap_at_s is not None:
+        out[t >= swap_at_s, :2] = [1, 0]
+    return out
+
+
+def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOptions | None = None,
+          wall_ms: list | None = None, worn: np.ndarray | None = None) -> tuple[list[dict], dict]:
+    """Per frame the subjects tracked ({id: (theta, cameras, suit)}: suit, the performer whose
+    suit's readings the solve had, -1 for none), and the tracker's counts. suits: each
+    performer has a suit calibrated on them (the oracle calibration: their skeleton, the layout
+    on it, the true sensor sites), worn as `worn` says (worn_by; default their own); wall_ms,
+    when given, receives each frame's track time."""
     first = scene.performers[0]
     skeleton, layout = nominal(first.layout.name)
+    calibrations = [(t.skeleton, t.layout, t.imus) for t in scene.performers] if suits else []
     tracker = _core.SubjectTracker(skeleton, first.rig, layout, pose_prior.load(), _core.SolverOptions(),
-                                   tracking or _core.TrackerOptions())
+                                   tracking or _core.TrackerOptions(), calibrations)
+    worn = worn_by(scene) if worn is None else worn
     frames = []
-    for time, seen in zip(first.times, scene.persons):
+    for f, (time, seen) in enumerate(zip(first.times, scene.persons)):
         cameras = [c for c, people in enumerate(seen or []) for _ in people]
         keypoints = np.array([p for people in (seen or []) for p in people]).reshape(len(cameras), len(layout), 3)
+        wearers = [scene.performers[p] for p in worn[f]] if suits else []
+        quaternions, accelerations = [t.quaternions[f] for t in wearers], [t.accelerations[f] for t in wearers]
         start = _time.perf_counter()
-        subjects, _ = tracker.track(float(time), cameras, keypoints)
+        subjects, _ = tracker.track(float(time), cameras, keypoints, quaternions, accelerations)
         if wall_ms is not None:
             wall_ms.append(1e3 * (_time.perf_counter() - start))
-        frames.append({s.id: (np.array(s.result.theta), list(s.cameras)) for s in subjects})
+        frames.append({s.id: (np.array(s.result.theta), list(s.cameras), s.suit) for s in subjects})
     return frames, tracker.counts
 
 
@@ -77,27 +96,35 @@ def _match(distance: np.ndarray) -> dict[int, int]:
     return best
 
 
-def score(scene: sim_people.Scene, frames: list[dict]) -> list[dict]:
-    """Per performer: frames matched to a subject, their mean joint-centre error (cm), and
-    the identity swaps."""
-    skeleton, _ = nominal(scene.performers[0].layout.name)
+def score(scene: sim_people.Scene, frames: list[dict], worn: np.ndarray | None = None) -> list[dict]:
+    """Per performer: frames matched to a subject, their mean joint-centre error (cm), the
+    identity swaps, and which suit the matched subject's solve had: the one they wear (worn:
+    worn_by) from which second on, and on how many frames another one."""
+    worn = worn_by(scene) if worn is None else worn
+    nominal_skeleton, _ = nominal(scene.performers[0].layout.name)
     truth = [[_centres(t.skeleton, th) for th in t.thetas] for t in scene.performers]
-    errors = [[] for _ in scene.performers]
-    ids = [[] for _ in scene.performers]
+    matched = [[] for _ in scene.performers]  # per performer: (frame, error m, id, suit)
     for f, subjects in enumerate(frames):
-        seen = {i: _centres(skeleton, theta) for i, (theta, cameras) in subjects.items() if cameras}
+        seen = {i: (_centres(scene.performers[suit].skeleton if suit >= 0 else nominal_skeleton, theta), suit)
+                for i, (theta, cameras, suit) in subjects.items() if cameras}
         order = list(seen)
-        distance = np.array([[np.linalg.norm(seen[i] - truth[p][f], axis=1).mean() for i in order]
+        distance = np.array([[np.linalg.norm(seen[i][0] - truth[p][f], axis=1).mean() for i in order]
                              for p in range(len(truth))]).reshape(len(truth), len(order))
         for p, s in _match(distance).items():
-            errors[p].append(distance[p, s])
-            ids[p].append(order[s])
+            matched[p].append((f, distance[p, s], order[s], seen[order[s]][1]))
+    times = scene.performers[0].times
     out = []
-    for p, (e, i) in enumerate(zip(errors, ids)):
-        out.append({"frames": len(frames), "frames_tracked": len(e),
-                    "joint_centres_pos_cm": round(100.0 * float(np.mean(e)), 2) if e else None,
-                    "identity_swaps": int(np.count_nonzero(np.diff(i))) if len(i) > 1 else 0,
-                    "ids": sorted(set(i))})
+    for p, rows in enumerate(matched):
+        ids = [r[2] for r in rows]
+        own = [r[0] for r in rows if r[3] >= 0 and worn[r[0], r[3]] == p]
+        out.append({"frames": len(frames), "frames_tracked": len(rows),
+                    "joint_centres_pos_cm": round(100.0 * float(np.mean([r[1] for r in rows])), 2) if rows else None,
+                    "identity_swaps": int(np.count_nonzero(np.diff(ids))) if len(ids) > 1 else 0,
+                    "ids": sorted(set(ids)),
+                    "own_suit_from_s": round(float(times[own[0]] - times[0]), 2) if own else None,
+                    "frames_with_own_suit": len(own),
+                    "frames_with_another_suit": sum(1 for r in rows if r[3] >= 0 and worn[r[0], r[3]] != p),
+                    "own_suit_frames": own})
     return out
 
 
@@ -108,21 +135,30 @@ def closest_approach(scene: sim_people.Scene) -> float | None:
     return round(float(min(pairs)), 3) if pairs else None
 
 
-def evaluate(clips: list[Path], people: int, seconds: float, config: Config, seed: int) -> dict:
-    """The scene of `people` performers, tracked and scored, and each performer alone."""
+def evaluate(clips: list[Path], people: int, seconds: float, config: Config, seed: int, suits: bool = True,
+             swap_suits_at_s: float | None = None) -> dict:
+    """The scene of `people` performers, tracked and scored, and each performer alone;
+    suits: each wears their own (else video only), performers 0 and 1 swapping theirs at
+    swap_suits_at_s (s into the scene) if given."""
     scene = sim_people.simulate(clips, people, seconds, config, np.random.default_rng(seed))
-    frames, counts = track(scene)
-    together = score(scene, frames)
+    worn = worn_by(scene, swap_suits_at_s)
+    frames, counts = track(scene, suits, worn=worn)
+    together = score(scene, frames, worn)
+    times = scene.performers[0].times - scene.performers[0].times[0]
     for p, result in enumerate(together):
         alone_scene = sim_people.simulate(clips, people, seconds, config, np.random.default_rng(seed), alone=p)
-        alone = score(alone_scene, track(alone_scene)[0])[0]
+        alone = score(alone_scene, track(alone_scene, suits)[0])[0]
         result["clip"] = Path(clips[scene.placements[p].clip]).name
         result["alone_joint_centres_pos_cm"] = alone["joint_centres_pos_cm"]
         if result["joint_centres_pos_cm"] and alone["joint_centres_pos_cm"]:
             result["ratio_to_alone"] = round(result["joint_centres_pos_cm"] / alone["joint_centres_pos_cm"], 3)
-    return {"people": people, "seconds": seconds, "seed": seed, "preset": config.preset,
-            "frames": len(frames), "closest_approach_m": closest_approach(scene),
-            "identity_swaps": sum(r["identity_swaps"] for r in together),
+        own = result.pop("own_suit_frames")
+        if swap_suits_at_s is not None and p < 2:  # when the suit now worn was found on them
+            after = [f for f in own if times[f] >= swap_suits_at_s]
+            result["swapped_suit_found_after_s"] = round(float(times[after[0]] - swap_suits_at_s), 2) if after else None
+    return {"people": people, "seconds": seconds, "seed": seed, "preset": config.preset, "suits": suits,
+            "swap_suits_at_s": swap_suits_at_s, "frames": len(frames), "closest_approach_m": closest_approach(scene),
+            "identity_swaps": sum(r["identity_swaps"] for r in together), "suit_changes": counts["suit_changes"],
             "subjects_born": counts["births"], "tracker": counts, "performers": together}
 
 
@@ -141,11 +177,12 @@ def bench(seconds: float = 8.0, seed: int = 0) -> dict:
         tracking = _core.TrackerOptions()
         tracking.threads = threads
         ms: list[float] = []
-        frames, counts = track(scene, tracking, ms)
+        frames, counts = track(scene, True, tracking, ms)
         tracked = np.array(ms[len(ms) // 10:])  # the subjects are born in the first frames
         key = f"threads_{threads}"
         out[key] = {"p50_ms": round(float(np.median(tracked)), 3), "p99_ms": round(float(np.percentile(tracked, 99)), 3),
                     "max_ms": round(float(tracked.max()), 3), "subjects_born": counts["births"],
-                    "identity_swaps": sum(r["identity_swaps"] for r in score(scene, frames))}
+                    "identity_swaps": sum(r["identity_swaps"] for r in score(scene, frames)),
+                    "suits_worn_at_end": sum(1 for _, _, suit in frames[-1].values() if suit >= 0)}
     out["target_p99_ms"] = 10.0
     return out

@@ -1,0 +1,169 @@
+#include "mocap/suit_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "mocap/assignment.h"
+
+namespace mocap {
+namespace {
+
+constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+template <typename T>
+void DropBefore(double time, std::deque<T>* history) {
+  while (!history->empty() && history->front().time < time) history->pop_front();
+}
+
+}  // namespace
+
+bool SuitMatchOptions::IsValid(std::string* error) const {
+  const bool ok = window_s > 0 && baseline_s > 0 && baseline_s < window_s && min_turn_rad >= 0 &&
+                  gate_rad > 0 && margin_rad >= 0 &&
+                  std::isfinite(window_s + gate_rad + margin_rad);
+  if (!ok && error)
+    *error =
+        "window_s > baseline_s > 0, min_turn_rad >= 0, gate_rad > 0, margin_rad >= 0, all finite";
+  return ok;
+}
+
+SuitMatcher::SuitMatcher(std::vector<std::vector<int>> suit_bones, SuitMatchOptions options)
+    : suit_bones_(std::move(suit_bones)),
+      options_(options),
+      suit_history_(suit_bones_.size()),
+      wearers_(suit_bones_.size(), 0),
+      decided_(suit_bones_.size(), 0) {
+  std::string error;
+  if (!options_.IsValid(&error)) throw std::invalid_argument("SuitMatchOptions: " + error);
+}
+
+bool SuitMatcher::Turns(const std::deque<Timed>& history, const Timed& now,
+                        std::vector<double>* angles) const {
+  const Timed* then = nullptr;
+  for (const Timed& t : history)
+    if (t.time <= now.time - options_.baseline_s) then = &t;
+  if (!then) return false;
+  angles->assign(now.rotations.size(), NAN);
+  for (size_t i = 0; i < now.rotations.size(); ++i) {
+    const Eigen::Quaterniond &a = then->rotations[i], &b = now.rotations[i];
+    if (a.coeffs().allFinite() && b.coeffs().allFinite()) (*angles)[i] = a.angularDistance(b);
+  }
+  return true;
+}
+
+void SuitMatcher::Add(double timestamp, const std::map<uint32_t, BodyPose>& bodies,
+                      const std::vector<std::vector<Eigen::Quaterniond>>& suits) {
+  if (suits.size() != suit_bones_.size())
+    throw std::invalid_argument("SuitMatcher::Add: readings for " + std::to_string(suits.size()) +
+                                " suits, not " + std::to_string(suit_bones_.size()));
+  for (auto it = subject_history_.begin(); it != subject_history_.end();)  // subjects gone
+    it = bodies.count(it->first) ? std::next(it) : subject_history_.erase(it);
+  for (auto it = pairs_.begin(); it != pairs_.end();)
+    it = bodies.count(it->first.second) ? std::next(it) : pairs_.erase(it);
+  const double keep_from = timestamp - 2 * options_.baseline_s;
+  for (size_t s = 0; s < suits.size(); ++s) {
+    if (suits[s].size() != suit_bones_[s].size())
+      throw std::invalid_argument("SuitMatcher::Add: suit " + std::to_string(s) + " has " +
+                                  std::to_string(suit_bones_[s].size()) + " sensors");
+    const Timed sensors{timestamp, suits[s]};
+    std::vector<double> sensor_turns, bone_turns;
+    const bool sensors_turned = Turns(suit_history_[s], sensors, &sensor_turns);
+    suit_history_[s].push_back(sensors);
+    DropBefore(keep_from, &suit_history_[s]);
+    for (const auto& [id, body] : bodies) {
+      Timed bones{timestamp, {}};
+      for (int b : suit_bones_[s]) bones.rotations.emplace_back(body.rotation[b]);
+      std::vector<std::deque<Timed>>& history = subject_history_[id];
+      if (history.empty()) history.resize(suits.size());
+      Pair& pair = pairs_.try_emplace({static_cast<int>(s), id}, Pair{{}, timestamp}).first->second;
+      const bool bones_turned = Turns(history[s], bones, &bone_turns);
+      history[s].push_back(std::move(bones));
+      DropBefore(keep_from, &history[s]);
+      if (!sensors_turned || !bones_turned) continue;
+      std::vector<double> differences;
+      double most = 0;
+      for (size_t i = 0; i < sensor_turns.size(); ++i) {
+        if (std::isnan(sensor_turns[i]) || std::isnan(bone_turns[i])) continue;
+        differences.push_back(std::abs(sensor_turns[i] - bone_turns[i]));
+        most = std::max({most, sensor_turns[i], bone_turns[i]});
+      }
+      if (!differences.empty() && most >= options_.min_turn_rad)
+        pair.frames.emplace_back(timestamp, Median(differences));
+      while (!pair.frames.empty() && pair.frames.front().first < timestamp - options_.window_s)
+        pair.frames.pop_front();
+    }
+  }
+  Decide(timestamp);
+}
+
+void SuitMatcher::Forget(int suit, uint32_t id) {
+  for (auto it = pairs_.begin(); it != pairs_.end();)
+    it = it->first.first == suit || it->first.second == id ? pairs_.erase(it) : std::next(it);
+  if (suit >= 0 && suit < static_cast<int>(wearers_.size())) wearers_[suit] = 0;
+}
+
+std::map<uint32_t, double> SuitMatcher::Disagreements(int suit) const {
+  std::map<uint32_t, double> out;
+  for (const auto& [key, pair] : pairs_) {
+    if (key.first != suit || static_cast<int>(pair.frames.size()) < kMinMovingFrames) continue;
+    double sum = 0;
+    for (const auto& f : pair.frames) sum += f.second;
+    out[key.second] = sum / pair.frames.size();
+  }
+  return out;
+}
+
+// Whether suit s's subject in the assignment `to` is clear: giving the suit to any other
+// subject instead (and that subject's suit, if any, to s's subject) costs at least the margin.
+bool SuitMatcher::Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to, int s) const {
+  const int j = to[s];
+  for (int k = 0; k < cost.cols(); ++k) {
+    if (k == j || !std::isfinite(cost(s, k))) continue;
+    const auto other = std::find(to.begin(), to.end(), k);  // the suit k wears now
+    double alternative = cost(s, k) - cost(s, j);
+    if (other != to.end()) {
+      const int t = static_cast<int>(other - to.begin());
+      if (!std::isfinite(cost(t, j))) continue;  // that swap is not possible
+      alternative += cost(t, j) - cost(t, k);
+    }
+    if (alternative < options_.margin_rad) return false;
+  }
+  return true;
+}
+
+void SuitMatcher::Decide(double timestamp) {
+  std::vector<uint32_t> ids;
+  for (const auto& [id, history] : subject_history_) ids.push_back(id);
+  Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(suit_bones_.size(), ids.size(), NAN);
+  for (size_t s = 0; s < suit_bones_.size(); ++s) {
+    const std::map<uint32_t, double> d = Disagreements(static_cast<int>(s));
+    for (size_t j = 0; j < ids.size(); ++j) {
+      const auto it = d.find(ids[j]);
+      const Pair& pair = pairs_.at({static_cast<int>(s), ids[j]});
+      if (it != d.end() && timestamp - pair.first >= options_.window_s) cost(s, j) = it->second;
+    }
+  }
+  const std::vector<int> to = AssignRows(cost, options_.gate_rad);
+  for (size_t s = 0; s < suit_bones_.size(); ++s) {
+    uint32_t& wearer = wearers_[s];
+    if (wearer && !subject_history_.count(wearer)) wearer = 0;  // retired
+    if (to[s] < 0) {
+      const auto d = Disagreements(static_cast<int>(s));
+      if (wearer && d.count(wearer) && d.at(wearer) > options_.gate_rad) wearer = 0;
+      continue;
+    }
+    if (!Clear(cost, to, static_cast<int>(s)) || wearer == ids[to[s]]) continue;
+    wearer = ids[to[s]];
+    // on someone else than its last wearer, who is still here
+    if (decided_[s] && decided_[s] != wearer && subject_history_.count(decided_[s])) changes_++;
+    decided_[s] = wearer;
+  }
+}
+
+}  // namespace mocap
