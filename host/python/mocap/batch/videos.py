@@ -10,9 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mocap import _core
 from mocap.errors import InputError
-from mocap.io import calib_qca, calib_toml
+from mocap.io.video_rig import rig_for
 from mocap.io.take_folder import LAYOUTS, TakeFolder, write_take
 from mocap_edge.detect.base import open_detector
 from mocap_edge.detect.video import detect_frames, open_tracker
@@ -40,31 +39,11 @@ def calibration(trial: Path) -> Path:
                      f"{trial.parent / 'calibration'})")
 
 
-def _key(name: str) -> str:
-    return "".join(ch for ch in name.lower() if ch.isalnum())
-
-
-def _rig_for(calib: Path, cameras: list[str]) -> _core.Rig:
-    """The calibration's cameras in the order of the videos, matched by name ("cam01" = "cam_01")."""
-    rig = calib_qca.load(calib) if calib.name.endswith(".qca.txt") else calib_toml.load(calib)
-    by_key = {_key(c.name): c for c in rig.cameras}
-    missing = [c for c in cameras if _key(c) not in by_key]
-    if missing:
-        raise InputError(f"{calib}: no camera for the video {missing[0]!r}; it has "
-                         f"{', '.join(c.name for c in rig.cameras)}")
-    chosen = []
-    for name in cameras:
-        cam = by_key[_key(name)]
-        cam.name = name
-        chosen.append(cam)
-    return _core.Rig(chosen)
-
-
 def write_take_folder(trial: Path, out: Path) -> dict:
     """Detects the trial's videos into the take folder `out`; what was detected."""
     files = videos(trial)
     calib = calibration(trial)
-    rig = _rig_for(calib, [v.stem for v in files])
+    rig = rig_for(calib, [v.stem for v in files])
     tracker_layout, people, rates = None, [], set()
     model = open_detector("blazepose", threads=THREADS)  # loaded once; a tracker per video holds its regions
     for video in files:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mocap import paths
 from mocap.errors import InputError
-from mocap.eval import people, simulated, tables, tables_heading, take_truth
+from mocap.eval import people, real_people, simulated, tables, tables_heading, take_truth
 from mocap.sim import detector, extremes, take
 
 PRESETS = ["hq13", "hs13", "hq6", "hs6"]
@@ -23,6 +23,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="instead: one scene of N performers playing the --motion clips (in turn; a clip used "
                         "again starts elsewhere in it), tracked and solved together from video (--seconds long, "
                         "default 8), each also solved alone; identity swaps and errors per performer to --json")
+    e.add_argument("--multiperson-trial", action="store_true",
+                   help="instead: Pose2Sim's real multi-person trial (Demo_MultiPerson, fetched on first use) "
+                        "detected by the camera box's detector, tracked and solved from video; figures to --json")
+    e.add_argument("--sheet", metavar="JPG", help="--multiperson-trial: a contact sheet of frames with the ids drawn")
     e.add_argument("--no-suits", action="store_true", help="--people: video only (default: each wears a suit of "
                    "13 IMUs calibrated on them, which the tracker finds on them from motion)")
     e.add_argument("--swap-suits-at", type=float, default=None, metavar="S",
@@ -77,6 +81,12 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.take:
         return _take(args)
+    if args.multiperson_trial:
+        result = real_people.evaluate(Path(args.sheet) if args.sheet else None)
+        if args.json:
+            Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+        print(json.dumps({k: v for k, v in result.items() if k != "tracker"}), flush=True)
+        return 0
     if not args.motion or not args.json:
         raise InputError("--motion (or --take) and --json are needed unless --table is given")
     clips = [c for m in map(Path, args.motion) for c in (sorted(m.rglob("*.bvh")) if m.is_dir() else [m])]

@@ -1,6 +1,7 @@
 """Data from registry packages, cached under .cache/ by the setup step (needs nothing
 built: `python -m mocap.io.demo_data`). The first two are Pose2Sim's "Balancing" demo trial
-(PyPI, BSD-3-Clause, licence kept beside the files), the third its batch demo (`fetch_batch`):
+(PyPI, BSD-3-Clause, licence kept beside the files), the third its batch demo (`fetch_batch`), the
+fourth its multi-person demo (`fetch_multiperson`):
 - the demo's motion: its triangulated 3D keypoints (pose2sim 0.4.15), `fetch`;
 - the real multi-camera trial for the edge detector's evaluation (`fetch_trial`): the four
   videos (pose2sim 0.10.49, Demo_SinglePerson: 100 frames at 60 fps, 1080 x 1920), and from
@@ -114,6 +115,26 @@ def fetch_batch(dest: Path = BATCH_CACHE) -> Path:
     return dest
 
 
+MULTI_CACHE = paths.REPO / ".cache" / "pose2sim-multiperson"
+MULTI_MEMBERS = {"Pose2Sim/Demo_MultiPerson/": "", "pose2sim-0.10.49.dist-info/licenses/LICENSE": "LICENSE"}
+
+
+def fetch_multiperson(dest: Path = MULTI_CACHE) -> Path:
+    """Pose2Sim's multi-person demo (pose2sim 0.10.49, Demo_MultiPerson): videos/camNN.mp4 (four
+    cameras, 100 frames at 60 fps, 1088 x 1920, two people) and calibration/Calib.qca.txt
+    (Qualisys); downloaded (~40 MB wheel) only when incomplete."""
+    if (dest / TRIAL_DONE).is_file():
+        return dest
+    with _wheel("pose2sim==0.10.49", dest) as z:
+        for member, name in MULTI_MEMBERS.items():
+            for m in [n for n in z.namelist() if n.startswith(member) and not n.endswith("/")]:
+                target = dest / name / m[len(member):] if member.endswith("/") else dest / name
+                target.parent.mkdir(parents=True, exist_ok=True)
+                target.write_bytes(z.read(m))
+    (dest / TRIAL_DONE).write_text("pose2sim 0.10.49 Demo_MultiPerson\n")
+    return dest
+
+
 def _videos_intact(dest: Path) -> bool:
     return all((dest / name).is_file() and hashlib.sha256((dest / name).read_bytes()).hexdigest() == sha
                for name, sha in VIDEOS.values())
@@ -151,6 +172,7 @@ def main() -> int:
         log.info("demo motion files in %s", fetch())
         log.info("real trial files in %s", fetch_trial())
         log.info("batch demo trials in %s", fetch_batch())
+        log.info("multi-person demo in %s", fetch_multiperson())
     except DataMissingError as e:
         log.error("error: %s", e)
         return 1
