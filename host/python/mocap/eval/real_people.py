@@ -1,7 +1,8 @@
 """Several people on real video: Pose2Sim's multi-person demo trial (pose2sim 0.10.49,
 Demo_MultiPerson: four cameras, 100 frames at 60 fps, two people, Qualisys calibration;
 `mocap.io.demo_data.fetch_multiperson`). Every video is detected by the camera box's own
-detector (BlazePose with region tracking, up to MAX_PEOPLE per camera), each camera's people
+detector (BlazePose with region tracking, up to MAX_PEOPLE per camera, the person detector
+looking for newcomers every REDETECT_EVERY frames), each camera's people
 listed in its own order, and the host's SubjectTracker tracks and solves them from video (the
 default skeleton). No ground truth: scored by what a user sees — the people per frame, the
 subjects born, the ids each lasting through the trial, and the reprojection error of each
@@ -24,9 +25,11 @@ from mocap.io.video_rig import rig_for
 from mocap.model import prior as pose_prior
 from mocap.model import studio
 from mocap_edge.detect.base import open_detector
-from mocap_edge.detect.video import detect_frames, open_tracker
+from mocap_edge.detect.tracking import Tracker
+from mocap_edge.detect.video import detect_frames
 
 MAX_PEOPLE = 4  # tracked per camera by the detector
+REDETECT_EVERY = 4  # frames: the person detector looks for newcomers (Pose2Sim's demo: det_frequency 4)
 COLOURS = [(230, 25, 75), (60, 180, 75), (0, 130, 200), (245, 130, 48), (145, 30, 180), (70, 240, 240)]  # RGB
 
 
@@ -38,7 +41,7 @@ def detect(trial: Path) -> tuple[_core.Rig, str, float, list, list]:
     model = open_detector("blazepose", threads=2)
     found, images, rate = [], [], 60.0
     for video in files:
-        tracker = open_tracker(model, MAX_PEOPLE)
+        tracker = Tracker(model, max_people=MAX_PEOPLE, redetect_every=REDETECT_EVERY)
         frames = list(detect_frames(video, tracker))
         found.append([people for _, people, _ in frames])
         images.append([frame.image for frame, _, _ in frames])
