@@ -47,6 +47,11 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--hs", nargs=2, type=int, default=(1, 1), metavar=("PERIOD", "BURST"),
                    help="detect on BURST consecutive frames of every PERIOD (high-speed mode)")
     p.add_argument("--realtime", action="store_true", help="play a file source at its capture times")
+    p.add_argument("--max-people", type=int, default=camera_box.MAX_PEOPLE,
+                   help=f"people tracked per frame (default {camera_box.MAX_PEOPLE})")
+    p.add_argument("--redetect-every", type=int, default=camera_box.REDETECT_EVERY, metavar="FRAMES",
+                   help="the person detector looks for newcomers every FRAMES frames while people are tracked "
+                        f"(default {camera_box.REDETECT_EVERY}; 0: only once everyone is lost)")
     p.add_argument("--model", help="keypoint model: blazepose (the default), a model configuration JSON, fake:, "
                    "or sim:STREAMS (the default with a sim: source)")
     p.add_argument("--trigger", metavar="CHIP:LINE", help="pair frames with the rising edges of this GPIO line "
@@ -113,6 +118,9 @@ def parse_arguments(argv: list[str] | None = None) -> argparse.Namespace:
         p.error(f"role {a.role} needs {', '.join('--' + m for m in missing)}")
     if not a.camera.strip():  # an empty setting in a box's settings file
         p.error("--camera is empty: the camera id the host's calibration knows this camera by")
+    if a.max_people < 1 or a.redetect_every < 0:
+        p.error(f"--max-people must be at least 1 and --redetect-every 0 or more, not {a.max_people} and "
+                f"{a.redetect_every}")
     try:  # the specs read when the box starts its source and trigger
         if a.size:
             _size(a.size, a.source.partition(":")[0])
@@ -173,7 +181,8 @@ def _run_box(a: argparse.Namespace, span: Span | None, supervisor: Supervisor) -
             pairing = TriggerPairing(stack.enter_context(_trigger(a.trigger)), source.nominal_fps)
         frames = supervisor.each(source)  # a turn per frame: READY at the first, then the watchdog
         return camera_box.run(frames, a.camera, a.bind, tuple(a.hs), pairing=pairing, realtime=a.realtime,
-                              model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000), keys=_keys(a))
+                              model=_model(a), exposure_mid_ns=round(a.exposure_mid_us * 1000), keys=_keys(a),
+                              max_people=a.max_people, redetect_every=a.redetect_every)
 
 
 def _source_options(a: argparse.Namespace, span: Span | None) -> dict[str, object]:

@@ -18,6 +18,7 @@ import zmq
 from mocap.net import transport, wire
 from mocap.net.keys import ServerKeys
 from mocap_edge import pacing
+from mocap_edge.errors import EdgeError
 from mocap_edge.detect.base import Detector, Person, open_detector
 from mocap_edge.detect.tracking import Tracker
 from mocap_edge.sources.base import Frame
@@ -84,16 +85,24 @@ def paired(frames: Iterable[Frame], pairing: TriggerPairing | None, exposure_mid
     return (dataclasses.replace(f, capture_time_ns=f.capture_time_ns + exposure_mid_ns) for f in pairing.pair(frames))
 
 
+MAX_PEOPLE = 4  # tracked per frame
+REDETECT_EVERY = 15  # frames (4 Hz at 60 fps): the person detector looks for newcomers
+
+
 def run(frames: Iterable[Frame], camera: str, endpoint: str, detect_every: tuple[int, int] = (1, 1),
         pairing: TriggerPairing | None = None, realtime: bool = False, model: Detector | None = None,
-        max_people: int = 2, exposure_mid_ns: int = 0, keys: ServerKeys | None = None) -> BoxCounts:
+        max_people: int = MAX_PEOPLE, exposure_mid_ns: int = 0, keys: ServerKeys | None = None,
+        redetect_every: int = REDETECT_EVERY) -> BoxCounts:
     """Publishes every frame of `frames` (paired with trigger edges when given). realtime:
     a file source is played at its capture times instead of as fast as detection runs.
     model: any Detector (default BlazePose). exposure_mid_ns: from the trigger edge (which
     a paired frame's time is) to the middle of the exposure, the time KeypointFrame names —
     the sensor's trigger delay plus half the exposure. keys: the box's CURVE identity (None:
-    a stream without keys)."""
-    tracker = Tracker(model or open_detector("blazepose"), max_people=max_people)
+    a stream without keys). redetect_every: frames between the person detector's looks for
+    newcomers while people are tracked (0: only once everyone is lost)."""
+    if max_people < 1 or redetect_every < 0:
+        raise EdgeError(f"max_people must be >= 1 and redetect_every >= 0, not {max_people} and {redetect_every}")
+    tracker = Tracker(model or open_detector("blazepose"), max_people=max_people, redetect_every=redetect_every)
     socket, counts = bind(endpoint, keys), BoxCounts()
     try:
         for frame, people in detections(paired(frames, pairing, exposure_mid_ns), tracker, camera, detect_every):

@@ -30,7 +30,9 @@ def test_a_malformed_setting_is_a_usage_error_before_any_device_is_opened():
     for args, said in ((["--source", "fake:", "--trigger", "/dev/gpiochip0:x"], "expected CHIP:LINE"),
                        (["--source", "libcamera:0", "--size", "640by480"], "expected WIDTHxHEIGHT"),
                        (["--source", "fake:", "--size", "640x480"], "--size is for a camera"),
-                       (["--source", "fake:", "--camera", ""], "--camera is empty")):
+                       (["--source", "fake:", "--camera", ""], "--camera is empty"),
+                       (["--source", "fake:", "--max-people", "0"], "--max-people must be at least 1"),
+                       (["--source", "fake:", "--redetect-every", "-1"], "--redetect-every 0 or more")):
         out = run(*args, "--bind", "tcp://127.0.0.1:0")
         assert out.returncode == 2 and "Traceback" not in out.stderr and "mocap_edge: error: " in out.stderr
         assert said in out.stderr

@@ -79,6 +79,40 @@ def test_the_fake_model_tracks_the_fake_cameras_square_and_finds_it_again_after_
     assert tracker.counts.detector_runs == 2  # the first frame, and after the jump
 
 
+class TwoSquares(FakeDetector):
+    """Finds each half of the image's red square separately: two people when both halves hold one."""
+
+    def detect(self, image: np.ndarray) -> list[Roi]:
+        found = []
+        for half in (slice(0, image.shape[1] // 2), slice(image.shape[1] // 2, None)):
+            masked = np.zeros_like(image)
+            masked[:, half] = image[:, half]
+            found += super().detect(masked)
+        return found
+
+
+def _squares(n: int, newcomer_from: int) -> list[np.ndarray]:
+    """n images of one red square on the left, a second on the right from newcomer_from on."""
+    images = []
+    for i in range(n):
+        image = np.zeros((120, 200, 3), np.uint8)
+        image[50:66, 20:36] = (255, 0, 0)
+        if i >= newcomer_from:
+            image[50:66, 150:166] = (255, 0, 0)
+        images.append(image)
+    return images
+
+
+def test_a_newcomer_is_found_while_others_are_tracked_only_when_the_detector_looks_again() -> None:
+    for every, found_at in ((5, 10), (0, None)):
+        tracker = Tracker(TwoSquares(), max_people=4, redetect_every=every)
+        counts = [len(tracker.step({"cam": image})["cam"]) for image in _squares(30, newcomer_from=8)]
+        # the detector looks at frames 0, 5, 10, ...: the newcomer of frame 8 is found at 10;
+        # without looking again it never is, as the first person is never lost
+        assert counts[:8] == [1] * 8
+        assert counts[8:] == ([1] * (found_at - 8) + [2] * (30 - found_at) if found_at else [1] * 22), (every, counts)
+
+
 def test_the_tracker_drops_people_below_the_models_presence_threshold() -> None:
     image = fake_frames(1)[0].image
     assert len(Tracker(FakeDetector(presence=0.6)).step({"c": image})["c"]) == 1
