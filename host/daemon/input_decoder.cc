@@ -47,6 +47,15 @@ CameraInput InputDecoder::ToCameraInput(const v1::KeypointFrame& frame, int came
   return in;
 }
 
+CameraInput InputDecoder::ToCameraInputEveryone(const v1::KeypointFrame& frame, int camera) const {
+  CameraInput in = ToCameraInput(frame, camera, -1);
+  for (const v1::KeypointPerson& p : frame.persons()) {
+    std::vector<Keypoint2D>& person = in.persons.emplace_back(layout_size_);
+    for (int k = 0; k < layout_size_; ++k) person[k] = Keypoint2D{p.x(k), p.y(k), p.confidence(k)};
+  }
+  return in;
+}
+
 int InputDecoder::ImuOf(const std::string& sensor_id) const {
   const auto it = imu_index_.find(sensor_id);
   return it == imu_index_.end() ? -1 : it->second;

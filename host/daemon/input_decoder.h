@@ -33,6 +33,8 @@ class InputDecoder {
   // The synchroniser's input of a frame of `camera`: the keypoints of person `subject`, none
   // when subject < 0 (the frame was not detected or has nobody).
   CameraInput ToCameraInput(const v1::KeypointFrame& frame, int camera, int subject) const;
+  // The frame with every person in CameraInput::persons (a session of several people).
+  CameraInput ToCameraInputEveryone(const v1::KeypointFrame& frame, int camera) const;
 
   // The IMU set's index of a sensor, -1 when it is not in the set.
   int ImuOf(const std::string& sensor_id) const;

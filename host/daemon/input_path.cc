@@ -35,8 +35,9 @@ std::string OffClockDetail(int64_t time_ns, int64_t now_ns) {
 }  // namespace
 
 InputPath::InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const KeypointLayout& layout,
-                     const SyncOptions& sync, double min_confidence)
+                     const SyncOptions& sync, double min_confidence, bool everyone)
     : rig_(rig),
+      everyone_(everyone),
       decoder_(rig, imus, layout),
       selector_(static_cast<int>(rig.cameras.size()), min_confidence),
       sync_(static_cast<int>(rig.cameras.size()), static_cast<int>(imus.size()), sync),
@@ -95,6 +96,13 @@ bool InputPath::FeedKeypoints(const v1::KeypointFrame& frame, int64_t now_ns, co
                              " arrived " + std::to_string(ms < 0 ? -ms : ms) + " ms " +
                              (ms < 0 ? "before" : "after") + " its time: its clock is off",
                          why);
+  }
+  if (everyone_) {  // a session of several people: they are told apart after synchronisation
+    if (!sync_.AddCamera(decoder_.ToCameraInputEveryone(frame, c), now_ns))
+      return monitor_.Drop("late_or_duplicate",
+                           frame.camera_id() + " frame " + std::to_string(frame.frame_index()),
+                           why);
+    return true;
   }
   // Projecting the tracked pose is needed only to tell several persons apart.
   const bool track =

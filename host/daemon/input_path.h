@@ -27,8 +27,10 @@ class InputPath {
   static constexpr int kNoLink = -1;
 
   // min_confidence: keypoints at or below are not detected (SolverOptions::min_confidence).
+  // everyone: a session of several people: every person of every camera is synchronised
+  // (SyncedFrame::people) and none chosen as the subject.
   InputPath(const Rig& rig, const std::vector<ImuSite>& imus, const KeypointLayout& layout,
-            const SyncOptions& sync, double min_confidence);
+            const SyncOptions& sync, double min_confidence, bool everyone = false);
 
   // Feed* take one message received at now_ns (the arrival clock). `tracker` (may be null):
   // a solver whose pose, once initialised, picks the subject among several persons. False
@@ -66,6 +68,7 @@ class InputPath {
 
  private:
   const Rig rig_;
+  const bool everyone_;
   InputDecoder decoder_;
   SubjectSelector selector_;
   StreamSynchroniser sync_;

@@ -152,8 +152,12 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, "
-            << pipeline->session().imus.size() << " IMUs; publishing on "
-            << pipeline->session().output
+            << pipeline->session().imus.size() << " IMUs"
+            << (pipeline->session().people > 1
+                    ? ", up to " + std::to_string(pipeline->session().people) +
+                          " people solved from video (the IMUs unused)"
+                    : std::string())
+            << "; publishing on " << pipeline->session().output
             << (pipeline->session().curve ? "; streams authenticated and encrypted (CURVE)\n"
                                           : "; streams without keys\n");
   mocap::DaemonSummary summary;

@@ -16,7 +16,19 @@ HostPipeline::HostPipeline(Session session, std::unique_ptr<Solver> solver)
     : session_(std::move(session)),
       step_(std::move(solver), session_.imus_calibrated),
       input_(session_.rig, session_.imus, session_.layout, session_.sync,
-             session_.solver.min_confidence) {}
+             session_.solver.min_confidence, session_.people > 1) {
+  if (session_.people <= 1) return;
+  TrackerOptions options;
+  options.max_subjects = session_.people;
+  options.min_confidence = session_.solver.min_confidence;
+  const Session& s = session_;
+  tracker_ = std::make_unique<SubjectTracker>(
+      [skeleton = s.skeleton, rig = s.rig, layout = s.layout, prior = s.prior, solver = s.solver] {
+        std::string ignored;  // the session's solver was made from the same: it cannot fail
+        return Solver::Create(skeleton, rig, layout, {}, prior, solver, &ignored);
+      },
+      options);
+}
 
 bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
                         std::string* why, int link) {
@@ -66,6 +78,10 @@ std::vector<SolvedFrame> HostPipeline::Flush() { return SolveFrames(input_.Flush
 std::vector<SolvedFrame> HostPipeline::SolveFrames(std::vector<SyncedFrame> frames) {
   std::vector<SolvedFrame> out;
   for (SyncedFrame& f : frames) {
+    if (tracker_) {
+      SolvePeople(f, &out);
+      continue;
+    }
     ApplyCalibrations(f.time_ns);
     const SolveResult r = step_.Solve(&f.observations);
     frames_failed_ += r.status == SolveStatus::kFailed;
@@ -75,6 +91,22 @@ std::vector<SolvedFrame> HostPipeline::SolveFrames(std::vector<SyncedFrame> fram
     input_.monitor().CountSolvedFrame();
   }
   return out;
+}
+
+// One PoseFrame per person seen in the frame, each with its subject id and the frame's index.
+void HostPipeline::SolvePeople(const SyncedFrame& f, std::vector<SolvedFrame>* out) {
+  const uint64_t index = frames_solved_++;
+  for (const SubjectFrame& s : tracker_->Track(f.observations.timestamp, f.people)) {
+    if (s.cameras.empty()) continue;  // not seen this frame: nothing new to publish
+    FrameObservations used;
+    for (int c : s.cameras) used.cameras.push_back(CameraObservation{c, {}});
+    frames_failed_ += s.result.status == SolveStatus::kFailed;
+    v1::PoseFrame pose =
+        EncodePoseFrame(used, s.result, f.time_ns, index, session_.skeleton, session_.rig, {});
+    pose.set_subject_id(s.id);
+    out->push_back({std::move(pose), f.last_input_ns});
+  }
+  input_.monitor().CountSolvedFrame();
 }
 
 v1::Health HostPipeline::Health(int64_t now_ns) {
@@ -88,6 +120,16 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
   in.frames_solved = frames_solved_;
   in.frames_failed = frames_failed_;
   v1::Health health = input_.monitor().Health(now_ns, in);
+  if (tracker_) {
+    const TrackerCounts& c = tracker_->counts();
+    v1::People* people = health.mutable_people();
+    people->set_tracked(tracker_->tracked());
+    people->set_born(c.births);
+    people->set_retired(c.retired);
+    people->set_found_again(c.revivals);
+    people->set_views_dropped(c.people_dropped);
+    people->set_views_unexplained(c.views_unexplained);
+  }
   edge_health_.AppendTo(now_ns, &health);
   return health;
 }

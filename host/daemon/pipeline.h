@@ -6,6 +6,7 @@
 //
 // Its parts, each in its own file: InputPath (wire message -> synchronised frame: decoding,
 // subject choice, synchronisation, drops and stream statistics), CalibrationQueue, SolveStep
+// (or, in a session of several people, the SubjectTracker: one solve per person)
 // (the solver with the IMUs it may use), EncodePoseFrame, StreamMonitor (Health), EdgeHealth
 // (the edge processes' own reports, folded into Health).
 #ifndef MOCAP_DAEMON_PIPELINE_H_
@@ -20,6 +21,7 @@
 #include "calibration_queue.h"
 #include "edge_health.h"
 #include "input_path.h"
+#include "mocap/subject_tracker.h"
 #include "mocap/v1/calibration.pb.h"
 #include "mocap/v1/health.pb.h"
 #include "mocap/v1/pose_frame.pb.h"
@@ -71,6 +73,7 @@ class HostPipeline {
  private:
   HostPipeline(Session session, std::unique_ptr<Solver> solver);
   std::vector<SolvedFrame> SolveFrames(std::vector<SyncedFrame> frames);
+  void SolvePeople(const SyncedFrame& f, std::vector<SolvedFrame>* out);
   bool FeedCalibration(const v1::Calibration& calibration, int64_t now_ns, std::string* why);
   // Applies the queued calibrations valid at or before time_ns.
   void ApplyCalibrations(int64_t time_ns);
@@ -80,6 +83,7 @@ class HostPipeline {
   InputPath input_;
   CalibrationQueue calibrations_;
   EdgeHealth edge_health_;
+  std::unique_ptr<SubjectTracker> tracker_;  // a session of several people
   uint64_t frames_solved_ = 0;
   uint64_t frames_failed_ = 0;  // refused by the solver (Health's frames_dropped)
 };

@@ -15,7 +15,7 @@ using nlohmann::json;
 // The keys of the session object itself.
 constexpr const char* kSessionKeys[] = {"format",          "skeleton", "rig",    "layout", "imus",
                                         "prior",           "inputs",   "output", "sync",   "solver",
-                                        "imus_calibrated", "curve"};
+                                        "imus_calibrated", "curve",    "people"};
 
 bool CheckSessionKeys(const json& j, std::string* error) {
   if (!j.is_object()) return *error = "a session is a JSON object", false;
@@ -85,6 +85,13 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
     if (j.contains("solver") && !ReadSolverOptions(j.at("solver"), &s.solver, error))
       throw std::runtime_error(*error);
     s.imus_calibrated = j.value("imus_calibrated", true);
+    if (j.contains("people")) {
+      if (!j.at("people").is_number_integer() || j.at("people").get<int>() < 1 ||
+          j.at("people").get<int>() > kMaxPeople)
+        throw std::runtime_error("people must be a whole number from 1 to " +
+                                 std::to_string(kMaxPeople));
+      s.people = j.at("people").get<int>();
+    }
     if (j.contains("curve")) {
       CurveKeys keys;
       if (!ReadCurveKeys(j.at("curve"), base.string(), s.inputs, &keys, error))

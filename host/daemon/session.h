@@ -9,7 +9,8 @@
 //    "solver": {"max_iterations": 10, "velocity_gain": 0.3, "heading_time_constant": 1,
 //               "position": {"weight": 0.04, "loss": "cauchy"}, ...},
 //    "imus_calibrated": true,
-//    "curve": {"host_key": "keys/host.key", "inputs": {"tcp://edge-box-1:5600": "Z85 key"}}}
+//    "curve": {"host_key": "keys/host.key", "inputs": {"tcp://edge-box-1:5600": "Z85 key"}},
+//    "people": 1}
 // Paths are relative to the session file. "solver" takes every field of SolverOptions by its
 // name, "sync" every field of SyncOptions but max_pending_frames, times in milliseconds
 // (options_json.h: SolverOptionKeys, SyncOptionKeys). "imus_calibrated": false (default true) says
@@ -18,6 +19,10 @@
 // the wire are the rig's camera names, sensor ids the IMU set's names. Missing "sync" / "solver"
 // keys keep the defaults; an unknown key anywhere is an error naming it. "curve" (optional) holds
 // the streams' keys (curve_keys.h); without it the streams are neither authenticated nor encrypted.
+// "people" (default 1): the most performers solved at once. Above 1 every person of every camera
+// is tracked (SubjectTracker: subject_tracker.h) and solved from video with the session's
+// skeleton and layout, one PoseFrame per person with its subject_id; the IMU set is synchronised
+// but not solved with (suits in a live session are not built yet).
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -43,7 +48,10 @@ struct Session {
   std::string output;
   bool imus_calibrated = true;
   std::optional<CurveKeys> curve;
+  int people = 1;
 };
+
+constexpr int kMaxPeople = 8;  // a session's "people"
 
 bool LoadSession(const std::string& path, Session* out, std::string* error);
 

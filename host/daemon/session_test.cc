@@ -40,7 +40,8 @@ TEST(Session, SolverAndSyncKeysAreRead) {
           {{"solver",
             {{"velocity_gain", 0.5}, {"max_heading_step", 0.2}, {"position", {{"loss", "huber"}}}}},
            {"sync", {{"max_wait_ms", 30}, {"imu_history_ms", 500}, {"imu_only_rate_hz", 100}}},
-           {"imus_calibrated", false}}),
+           {"imus_calibrated", false},
+           {"people", 3}}),
       &s, &error))
       << error;
   EXPECT_EQ(s.solver.velocity_gain, 0.5);
@@ -50,6 +51,7 @@ TEST(Session, SolverAndSyncKeysAreRead) {
   EXPECT_EQ(s.sync.imu_history_ns, 500'000'000);
   EXPECT_EQ(s.sync.imu_only_rate_hz, 100);
   EXPECT_FALSE(s.imus_calibrated);
+  EXPECT_EQ(s.people, 3);
   EXPECT_EQ(s.rig.cameras.size(), 2u);
   EXPECT_EQ(s.layout.name, "coco17");
 }
@@ -61,6 +63,9 @@ TEST(Session, AnUnknownKeyIsAnErrorNamingIt) {
       {{{"sync", {{"max_wait_ms", "30"}}}}, "'max_wait_ms' must be a number"},
       {{{"solvr", json::object()}}, "'solvr'"},
       {{{"solver", {{"max_iterations", 0}}}}, "max_iterations = 0 is out of range"},
+      {{{"people", 0}}, "people must be a whole number from 1 to 8"},
+      {{{"people", 2.5}}, "people must be a whole number from 1 to 8"},
+      {{{"people", 9}}, "people must be a whole number from 1 to 8"},
   };
   for (const auto& [extra, message] : cases) {
     Session s;

@@ -174,6 +174,9 @@ SyncedFrame StreamSynchroniser::Release(Group group, int64_t now_ns) {
     if (in.detected && !in.keypoints.empty()) {
       out.observations.cameras.push_back(CameraObservation{in.camera, std::move(in.keypoints)});
     }
+    if (in.detected)
+      for (std::vector<Keypoint2D>& person : in.persons)
+        out.people.push_back(CameraObservation{in.camera, std::move(person)});
   }
   for (size_t i = 0; i < imus_.size(); ++i) {
     if (auto reading = Interpolate(static_cast<int>(i), group.time_ns)) {

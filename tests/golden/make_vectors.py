@@ -106,7 +106,7 @@ def pose_frame(m: dict) -> bytes:
             + b"".join(blob(5, joint(j)) for j in m.get("joints", [])) + blob(6, costs)
             + vint(7, m.get("iterations", 0)) + f64(8, m.get("solveTimeMs", 0.0)) + vint(9, m.get("qualityFlags", 0))
             + b"".join(text(10, c) for c in m.get("cameras", [])) + b"".join(text(11, i) for i in m.get("imus", []))
-            + f64(12, m.get("latencyMs", 0.0)))
+            + f64(12, m.get("latencyMs", 0.0)) + vint(14, m.get("subjectId", 0)))
 
 
 def stream_health(s: dict) -> bytes:
@@ -117,10 +117,16 @@ def stream_health(s: dict) -> bytes:
             + vint(18, int(s.get("handshakeFailures", 0))) + vint(19, int(s.get("clockSteps", 0))))
 
 
+def people(p: dict) -> bytes:
+    return b"".join(vint(1 + i, int(p.get(c, 0)))
+                    for i, c in enumerate(["tracked", "born", "retired", "foundAgain", "viewsDropped", "viewsUnexplained"]))
+
+
 def health(m: dict) -> bytes:
     return (text(1, m["source"]) + vint(2, int(m.get("timeNs", 0))) + b"".join(blob(3, stream_health(s)) for s in m["streams"])
             + f64(4, m.get("latencyP50Ms", 0.0)) + f64(5, m.get("latencyP99Ms", 0.0))
-            + vint(6, int(m.get("framesSolved", 0))) + vint(7, int(m.get("framesDropped", 0))))
+            + vint(6, int(m.get("framesSolved", 0))) + vint(7, int(m.get("framesDropped", 0)))
+            + (blob(8, people(m["people"])) if "people" in m else b""))
 
 
 def calibration(m: dict) -> bytes:
@@ -179,6 +185,18 @@ VECTORS = {
         "streams": [{"stream": "camera/cam2", "active": True, "rateHz": 60.0, "received": "7200", "dropped": "61",
                      "latencyP50Ms": 6.5, "latencyP99Ms": 9.25, "clockSteps": "2"}],
         "framesSolved": "7200"}, None),
+    # A session of several people: one PoseFrame per person, each with its subject id.
+    "pose_frame_subject": ("mocap.v1.PoseFrame", {
+        "captureTimeNs": "1763900000140123456", "frameIndex": "43", "theta": [1.5, 0.25, 0.9375],
+        "joints": [{"name": "pelvis", "px": 1.5, "py": 0.25, "pz": 0.9375, "qw": 1.0}],
+        "costs": {"position": 12.5}, "iterations": 2, "cameras": ["cam1", "cam2"], "subjectId": 3}, None),
+    # ... and the host's Health says whom it tracks.
+    "health_people": ("mocap.v1.Health", {
+        "source": "host", "timeNs": "1763900003000000000",
+        "streams": [{"stream": "camera/cam1", "active": True, "rateHz": 60.0, "received": "180"}],
+        "framesSolved": "180",
+        "people": {"tracked": 2, "born": "3", "retired": "1", "foundAgain": "2", "viewsDropped": "5",
+                   "viewsUnexplained": "40"}}, None),
     "calibration": ("mocap.v1.Calibration", {
         "source": "calibrator", "sequence": "2", "validFromNs": "1763900012000000000",
         "skeletonJson": '{"format": "mocap.skeleton/1", "bones": []}',

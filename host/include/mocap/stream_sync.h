@@ -60,6 +60,8 @@ struct CameraInput {
   int64_t time_ns = 0;
   bool detected = true;               // false: the frame only clocks the solve (HS mode)
   std::vector<Keypoint2D> keypoints;  // the subject's, in layout order; empty: nobody
+  // Every person the camera found (sessions of several people, instead of `keypoints`).
+  std::vector<std::vector<Keypoint2D>> persons;
 };
 
 struct ImuInput {
@@ -74,8 +76,9 @@ struct SyncedFrame {
   int64_t time_ns = 0;
   // timestamp: seconds since the first frame (epoch_ns()).
   FrameObservations observations;
-  int64_t last_input_ns = 0;         // arrival of the newest input the frame used
-  int64_t released_ns = 0;           // `now` when it was handed over
+  std::vector<CameraObservation> people;  // every person of every camera (several people)
+  int64_t last_input_ns = 0;              // arrival of the newest input the frame used
+  int64_t released_ns = 0;                // `now` when it was handed over
   std::vector<int> cameras_clocked;  // cameras that delivered the frame (with or without keypoints)
   std::vector<int> cameras_detected;  // of those, the ones that ran detection (not HS-only frames)
 };

@@ -111,3 +111,14 @@ def test_a_recording_without_poses_or_a_bvh_as_positions_is_refused(tmp_path):
     (tmp_path / "take.bvh").write_text("HIERARCHY\n")
     out = _export(tmp_path / "take.bvh", "--format", "trc", "--out", tmp_path / "x.trc")
     assert out.returncode == 2 and "trc is exported from a joint CSV" in out.stderr, out.stderr
+
+
+def test_poses_of_several_people_are_not_written_into_one_bvh(tmp_path):
+    from mocap.errors import InputError
+    from mocap.recording import offline
+
+    skeleton = _core.Skeleton.load(str(paths.DEFAULT_SKELETON))
+    poses = [wire.PoseFrame(capture_time_ns=t, theta=[0.0] * 66, subject_id=1 + t % 2) for t in range(4)]
+    with pytest.raises(InputError, match="several people"):
+        offline.write_poses(poses, skeleton, tmp_path / "take.bvh")
+    assert not (tmp_path / "take.bvh").exists()

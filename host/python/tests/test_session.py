@@ -67,7 +67,7 @@ def test_a_session_written_in_python_is_read_by_mocapd_with_every_option(session
     solver = every_option_changed()
     sync = SyncSettings(group_tolerance_ms=5, max_wait_ms=30, stale_after_ms=400, imu_max_gap_ms=50,
                         imu_max_hold_ms=20, imu_history_ms=1500, imu_only_rate_hz=50)
-    written = dataclasses.replace(session, solver=solver, sync=sync, imus_calibrated=False)
+    written = dataclasses.replace(session, solver=solver, sync=sync, imus_calibrated=False, people=3)
     path = written.save(tmp_path / "session.json")
     pipeline = _core.HostPipeline.load(str(path))  # mocapd's own reader: refuses any unknown key
     assert pipeline.skeleton.num_bones == 21
@@ -96,6 +96,9 @@ def test_every_sync_key_reaches_mocapd(session, tmp_path, key):
     ({"solver": {"max_iterations": 0}}, "solver"),
     ({"format": "mocap.session/2"}, "format"),
     ({"inputs": []}, "inputs"),
+    ({"people": 0}, "people must be a whole number from 1 to 8"),
+    ({"people": 9}, "people must be a whole number from 1 to 8"),
+    ({"people": True}, "people must be a whole number from 1 to 8"),
 ])
 def test_what_mocapd_refuses_the_reader_refuses(session, tmp_path, edit, message):
     path = tmp_path / "session.json"

@@ -30,6 +30,7 @@ from mocap import _core
 from mocap.errors import InputError
 from mocap.net import keys
 
+MAX_PEOPLE = 8  # a session's "people" (mocapd's kMaxPeople)
 FORMAT = "mocap.session/1"
 FILES = ("skeleton", "rig", "layout", "imus", "prior")  # the keys that name files
 
@@ -127,6 +128,7 @@ class Session:
     solver: dict[str, Any] = dataclasses.field(default_factory=dict)
     imus_calibrated: bool = True  # False: mocapd waits for a Calibration before using the IMUs
     curve: CurveSettings | None = None  # None: streams without keys
+    people: int = 1  # the most performers solved at once (above 1: from video, one PoseFrame each)
     base: Path = dataclasses.field(default=Path("."), compare=False)  # not written
 
     def file(self, key: str) -> Path | None:
@@ -172,6 +174,8 @@ class Session:
         out["imus_calibrated"] = self.imus_calibrated
         if self.curve is not None:
             out["curve"] = self.curve.to_json()
+        if self.people != 1:
+            out["people"] = self.people
         return out
 
     def dumps(self) -> str:
@@ -188,7 +192,7 @@ class Session:
         """A session from its JSON object; InputError names what mocapd would refuse."""
         if not isinstance(data, dict):
             raise InputError(f"{where}: a session is a JSON object")
-        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated", "curve")
+        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated", "curve", "people")
         unknown = [key for key in data if key not in known]
         if unknown:
             raise InputError(f"{where}: unknown session key '{unknown[0]}'")
@@ -199,7 +203,8 @@ class Session:
             raise InputError(f"{where}: no {', '.join(missing)}")
         session = cls(data["skeleton"], data["rig"], data["layout"], data["imus"], list(data["inputs"]),
                       data["output"], data.get("prior"), SyncSettings.from_json(data.get("sync", {}), where),
-                      dict(data.get("solver", {})), data.get("imus_calibrated", True), None, Path(base))
+                      dict(data.get("solver", {})), data.get("imus_calibrated", True), None, data.get("people", 1),
+                      Path(base))
         session._check(where)
         if "curve" in data:
             session.curve = CurveSettings.from_json(data["curve"], session.inputs, where)
@@ -224,6 +229,8 @@ class Session:
             raise InputError(f"{where}: inputs is a non-empty list of endpoints and output an endpoint")
         if not isinstance(self.imus_calibrated, bool):
             raise InputError(f"{where}: imus_calibrated is true or false")
+        if not isinstance(self.people, int) or isinstance(self.people, bool) or not 1 <= self.people <= MAX_PEOPLE:
+            raise InputError(f"{where}: people must be a whole number from 1 to {MAX_PEOPLE}")
         SyncSettings.from_json(self.sync.to_json(), where)
         _parse_solver(self.solver, where)
         if self.curve is not None:

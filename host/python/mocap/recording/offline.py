@@ -78,6 +78,9 @@ def frame_rate(poses: list) -> float:
 def write_poses(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None = None) -> None:
     """The solved poses as a BVH of `skeleton` (the latest calibration's) and, if csv, the joint
     positions as solved, each frame with the calibration in use then (mocap.io.joints_csv)."""
+    if any(p.subject_id for p in poses):
+        raise InputError("the poses are of several people (a session with \"people\" above 1): a BVH holds "
+                         "one; writing one file per person is not built yet")
     write_bvh(bvh, skeleton, np.array([list(p.theta) for p in poses]), frame_rate(poses))
     if csv is not None:
         times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
