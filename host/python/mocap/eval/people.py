@@ -16,14 +16,18 @@ are the times the subject matched to it changes id.
 from __future__ import annotations
 
 import itertools
+import json
 import time as _time
 from pathlib import Path
 
 import numpy as np
 
 from mocap import _core, paths
+from mocap.io.session import Session
 from mocap.model import joint_centres
 from mocap.model import prior as pose_prior
+from mocap.recording import offline
+from mocap.sim import messages as sim_messages
 from mocap.sim import people as sim_people
 from mocap.sim.take import Config
 
@@ -72,6 +76,27 @@ def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOp
             wall_ms.append(1e3 * (_time.perf_counter() - start))
         frames.append({s.id: (np.array(s.result.theta), list(s.cameras), s.suit) for s in subjects})
     return frames, tracker.counts
+
+
+def solve_as_mocapd(scene: sim_people.Scene, folder: Path) -> list[dict]:
+    """The scene's camera frames (every person each camera found) solved by the live host's
+    pipeline (what mocapd runs) in a session of as many people, video only: per frame
+    {subject_id: (theta, cameras, -1)}, as track() gives."""
+    first = scene.performers[0]
+    skeleton, _ = nominal(first.layout.name)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "skeleton.json").write_text(skeleton.to_json())
+    (folder / "rig.json").write_text(first.rig.to_json())
+    (folder / "imus.json").write_text(json.dumps({"format": "mocap.imus/1", "imus": []}))
+    session = Session("skeleton.json", "rig.json", str(paths.LAYOUTS / f"{first.layout.name}.json"), "imus.json",
+                      ["scene"], "scene", prior=str(paths.HOST_DATA / "prior_default.json"),
+                      people=len(scene.performers), base=folder).save(folder / "session.json")
+    poses = offline.solve_messages(offline.pipeline_for(session), sim_messages.scene_messages(scene))
+    index = {t: f for f, t in enumerate(sim_messages.frame_times_ns(first))}
+    frames: list[dict] = [{} for _ in scene.persons]
+    for p in poses:
+        frames[index[p.capture_time_ns]][p.subject_id] = (np.array(p.theta), list(p.cameras), -1)
+    return frames
 
 
 def _centres(skeleton: _core.Skeleton, theta: np.ndarray) -> np.ndarray:

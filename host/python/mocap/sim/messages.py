@@ -39,6 +39,18 @@ def messages(t: Take) -> list[tuple[int, str, bytes]]:
     return [wire.arrived(arrival, m) for arrival, m in out]
 
 
+def scene_messages(scene) -> list[tuple[int, str, bytes]]:
+    """(arrival ns, type name, payload) of a scene of several performers (mocap.sim.people):
+    each camera's frame with every person it found, in its own order (no IMUs)."""
+    first = scene.performers[0]
+    out = []
+    for f, (time_ns, seen) in enumerate(zip(frame_times_ns(first), scene.persons)):
+        for c, cam in enumerate(first.rig.cameras):
+            persons = None if seen is None else seen[c]
+            out.append(wire.arrived(time_ns, host_frames.camera_frame(cam, f, time_ns, first.layout.name, persons)))
+    return out
+
+
 def frame_times_ns(t: Take) -> list[int]:
     return [START_NS + int(round(s * 1e9)) for s in t.times]
 
