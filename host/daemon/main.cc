@@ -154,8 +154,9 @@ int main(int argc, char** argv) {
   std::cerr << "mocapd: " << pipeline->session().rig.cameras.size() << " cameras, "
             << pipeline->session().imus.size() << " IMUs"
             << (pipeline->session().people > 1
-                    ? ", up to " + std::to_string(pipeline->session().people) +
-                          " people solved from video (the IMUs unused)"
+                    ? ", up to " + std::to_string(pipeline->session().people) + " people, " +
+                          std::to_string(pipeline->session().suits.size()) + " suits" +
+                          (pipeline->session().suits.empty() ? " (the IMUs unused)" : "")
                     : std::string())
             << "; publishing on " << pipeline->session().output
             << (pipeline->session().curve ? "; streams authenticated and encrypted (CURVE)\n"

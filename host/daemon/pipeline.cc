@@ -1,5 +1,7 @@
 #include "pipeline.h"
 
+#include <algorithm>
+
 #include "pose_frame_encoder.h"
 #include "wire.h"
 
@@ -22,12 +24,19 @@ HostPipeline::HostPipeline(Session session, std::unique_ptr<Solver> solver)
   options.max_subjects = session_.people;
   options.min_confidence = session_.solver.min_confidence;
   const Session& s = session_;
+  std::vector<SuitCalibration> suits;
+  suit_of_.assign(s.imus.size(), {-1, -1});
+  for (size_t k = 0; k < s.suits.size(); ++k) {
+    suits.push_back(s.suits[k].calibration);
+    for (size_t i = 0; i < s.suits[k].sensors.size(); ++i)
+      suit_of_[s.suits[k].sensors[i]] = {static_cast<int>(k), static_cast<int>(i)};
+  }
   tracker_ = std::make_unique<SubjectTracker>(
       [skeleton = s.skeleton, rig = s.rig, layout = s.layout, prior = s.prior, solver = s.solver] {
         std::string ignored;  // the session's solver was made from the same: it cannot fail
         return Solver::Create(skeleton, rig, layout, {}, prior, solver, &ignored);
       },
-      options);
+      options, suits);
 }
 
 bool HostPipeline::Feed(std::string_view type, std::string_view payload, int64_t now_ns,
@@ -96,13 +105,24 @@ std::vector<SolvedFrame> HostPipeline::SolveFrames(std::vector<SyncedFrame> fram
 // One PoseFrame per person seen in the frame, each with its subject id and the frame's index.
 void HostPipeline::SolvePeople(const SyncedFrame& f, std::vector<SolvedFrame>* out) {
   const uint64_t index = frames_solved_++;
-  for (const SubjectFrame& s : tracker_->Track(f.observations.timestamp, f.people)) {
-    if (s.cameras.empty()) continue;  // not seen this frame: nothing new to publish
+  std::vector<std::vector<ImuObservation>> suits(session_.suits.size());  // each suit's readings
+  for (ImuObservation o : f.observations.imus) {
+    const auto [suit, sensor] = suit_of_[o.imu];
+    if (suit < 0) continue;  // a sensor of no suit
+    o.imu = sensor;
+    suits[suit].push_back(o);
+  }
+  for (const SubjectFrame& s :
+       tracker_->Track(f.observations.timestamp, f.people, nullptr, suits)) {
+    if (s.cameras.empty() && s.suit < 0) continue;  // not seen this frame: nothing new
     FrameObservations used;
     for (int c : s.cameras) used.cameras.push_back(CameraObservation{c, {}});
+    const SuitCalibration* suit = s.suit >= 0 ? &session_.suits[s.suit].calibration : nullptr;
+    if (suit) used.imus = suits[s.suit];
     frames_failed_ += s.result.status == SolveStatus::kFailed;
     v1::PoseFrame pose =
-        EncodePoseFrame(used, s.result, f.time_ns, index, session_.skeleton, session_.rig, {});
+        EncodePoseFrame(used, s.result, f.time_ns, index, suit ? suit->skeleton : session_.skeleton,
+                        session_.rig, suit ? suit->imus : std::vector<ImuSite>());
     pose.set_subject_id(s.id);
     out->push_back({std::move(pose), f.last_input_ns});
   }
@@ -129,6 +149,10 @@ v1::Health HostPipeline::Health(int64_t now_ns) {
     people->set_found_again(c.revivals);
     people->set_views_dropped(c.people_dropped);
     people->set_views_unexplained(c.views_unexplained);
+    people->set_suits_worn(static_cast<uint32_t>(std::count_if(
+        tracker_->wearers().begin(), tracker_->wearers().end(), [](uint32_t id) { return id; })));
+    people->set_suit_changes(c.suit_changes);
+    people->set_suits_doubted(c.suits_doubted);
   }
   edge_health_.AppendTo(now_ns, &health);
   return health;

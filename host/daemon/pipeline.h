@@ -83,7 +83,8 @@ class HostPipeline {
   InputPath input_;
   CalibrationQueue calibrations_;
   EdgeHealth edge_health_;
-  std::unique_ptr<SubjectTracker> tracker_;  // a session of several people
+  std::unique_ptr<SubjectTracker> tracker_;   // a session of several people
+  std::vector<std::pair<int, int>> suit_of_;  // per session IMU: (suit, its index there) or -1s
   uint64_t frames_solved_ = 0;
   uint64_t frames_failed_ = 0;  // refused by the solver (Health's frames_dropped)
 };

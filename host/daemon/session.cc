@@ -15,7 +15,7 @@ using nlohmann::json;
 // The keys of the session object itself.
 constexpr const char* kSessionKeys[] = {"format",          "skeleton", "rig",    "layout", "imus",
                                         "prior",           "inputs",   "output", "sync",   "solver",
-                                        "imus_calibrated", "curve",    "people"};
+                                        "imus_calibrated", "curve",    "people", "suits"};
 
 bool CheckSessionKeys(const json& j, std::string* error) {
   if (!j.is_object()) return *error = "a session is a JSON object", false;
@@ -45,6 +45,51 @@ void CheckNames(const Session& s) {
     throw std::runtime_error("imus: two IMUs are named '" + name +
                              "' (sensor ids on the wire must be unique)");
   if (s.layout.size() == 0) throw std::runtime_error("layout: no keypoints");
+}
+
+// "people" and "suits" (session.h), once the skeleton, layout and IMU set are read.
+void ReadPeople(const json& j, const std::filesystem::path& base, Session* s) {
+  if (j.contains("people")) {
+    const json& people = j.at("people");
+    if (!people.is_number_integer() || people.get<int>() < 1 || people.get<int>() > kMaxPeople)
+      throw std::runtime_error("people must be a whole number from 1 to " +
+                               std::to_string(kMaxPeople));
+    s->people = people.get<int>();
+  }
+  if (!j.contains("suits")) return;
+  if (s->people < 2) throw std::runtime_error("suits are for a session of several people");
+  if (!j.at("suits").is_array()) throw std::runtime_error("suits is a list");
+  std::vector<int> worn(s->imus.size(), -1);  // per session IMU: the suit it is in
+  for (const json& entry : j.at("suits")) {
+    const std::string where = "suit " + std::to_string(s->suits.size());
+    if (!entry.is_object() || !entry.contains("imus"))
+      throw std::runtime_error(where + ": an object with \"imus\" (and \"skeleton\")");
+    for (const auto& [key, value] : entry.items())
+      if (key != "imus" && key != "skeleton")
+        throw std::runtime_error(where + ": unknown key '" + key + "'");
+    std::string error;
+    Suit suit;
+    suit.calibration.skeleton = s->skeleton;
+    if (entry.contains("skeleton") &&
+        !LoadSkeletonJson((base / entry.at("skeleton").get<std::string>()).string(),
+                          &suit.calibration.skeleton, &error))
+      throw std::runtime_error(where + ": " + error);
+    if (!LoadImuSitesJson((base / entry.at("imus").get<std::string>()).string(),
+                          suit.calibration.skeleton, &suit.calibration.imus, &error))
+      throw std::runtime_error(where + ": " + error);
+    suit.calibration.layout = s->layout.ScaledTo(suit.calibration.skeleton);
+    for (const ImuSite& site : suit.calibration.imus) {
+      const auto it = std::find_if(s->imus.begin(), s->imus.end(),
+                                   [&](const ImuSite& i) { return i.name == site.name; });
+      if (it == s->imus.end())
+        throw std::runtime_error(where + ": sensor '" + site.name + "' is not in the IMU set");
+      int& in = worn[it - s->imus.begin()];
+      if (in >= 0) throw std::runtime_error(where + ": sensor '" + site.name + "' is in two suits");
+      in = static_cast<int>(s->suits.size());
+      suit.sensors.push_back(static_cast<int>(it - s->imus.begin()));
+    }
+    s->suits.push_back(std::move(suit));
+  }
 }
 
 }  // namespace
@@ -85,13 +130,7 @@ bool LoadSession(const std::string& path, Session* out, std::string* error) {
     if (j.contains("solver") && !ReadSolverOptions(j.at("solver"), &s.solver, error))
       throw std::runtime_error(*error);
     s.imus_calibrated = j.value("imus_calibrated", true);
-    if (j.contains("people")) {
-      if (!j.at("people").is_number_integer() || j.at("people").get<int>() < 1 ||
-          j.at("people").get<int>() > kMaxPeople)
-        throw std::runtime_error("people must be a whole number from 1 to " +
-                                 std::to_string(kMaxPeople));
-      s.people = j.at("people").get<int>();
-    }
+    ReadPeople(j, base, &s);
     if (j.contains("curve")) {
       CurveKeys keys;
       if (!ReadCurveKeys(j.at("curve"), base.string(), s.inputs, &keys, error))

@@ -10,7 +10,8 @@
 //               "position": {"weight": 0.04, "loss": "cauchy"}, ...},
 //    "imus_calibrated": true,
 //    "curve": {"host_key": "keys/host.key", "inputs": {"tcp://edge-box-1:5600": "Z85 key"}},
-//    "people": 1}
+//    "people": 1,
+//    "suits": [{"imus": "suit_a.json", "skeleton": "performer_a.json"}, ...]}
 // Paths are relative to the session file. "solver" takes every field of SolverOptions by its
 // name, "sync" every field of SyncOptions but max_pending_frames, times in milliseconds
 // (options_json.h: SolverOptionKeys, SyncOptionKeys). "imus_calibrated": false (default true) says
@@ -21,8 +22,10 @@
 // the streams' keys (curve_keys.h); without it the streams are neither authenticated nor encrypted.
 // "people" (default 1): the most performers solved at once. Above 1 every person of every camera
 // is tracked (SubjectTracker: subject_tracker.h) and solved from video with the session's
-// skeleton and layout, one PoseFrame per person with its subject_id; the IMU set is synchronised
-// but not solved with (suits in a live session are not built yet).
+// skeleton and layout, one PoseFrame per person with its subject_id. "suits" (several people
+// only): the suits that may be worn, each an IMU set (every sensor one of "imus", in one suit
+// only) calibrated on its wearer's skeleton (default the session's); which person wears which
+// is found from motion, and the wearer solved with it. Without suits the IMUs are unused.
 #ifndef MOCAP_DAEMON_SESSION_H_
 #define MOCAP_DAEMON_SESSION_H_
 
@@ -33,8 +36,16 @@
 #include "curve_keys.h"
 #include "mocap/solver.h"
 #include "mocap/stream_sync.h"
+#include "mocap/subject_tracker.h"
 
 namespace mocap {
+
+// A suit of a session of several people: its calibration (skeleton, the session's layout on it,
+// the suit's IMU sites) and, per suit IMU, its index in the session's IMU set.
+struct Suit {
+  SuitCalibration calibration;
+  std::vector<int> sensors;
+};
 
 struct Session {
   Skeleton skeleton;
@@ -49,6 +60,7 @@ struct Session {
   bool imus_calibrated = true;
   std::optional<CurveKeys> curve;
   int people = 1;
+  std::vector<Suit> suits;
 };
 
 constexpr int kMaxPeople = 8;  // a session's "people"

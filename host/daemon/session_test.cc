@@ -56,6 +56,47 @@ TEST(Session, SolverAndSyncKeysAreRead) {
   EXPECT_EQ(s.layout.name, "coco17");
 }
 
+// A suit file of the 13-IMU set's sensors `which`; its path.
+std::string WriteSuit(const std::string& name, const std::vector<json>& sensors) {
+  json suit = json::parse(std::ifstream(testing::DataPath("imus13.json")));
+  suit["imus"] = sensors;
+  const std::string path = ::testing::TempDir() + "/" + name + ".json";
+  std::ofstream(path) << suit.dump();
+  return path;
+}
+
+TEST(Session, SuitsAreSetsOfTheSessionsSensorsEachInOneSuit) {
+  const json set = json::parse(std::ifstream(testing::DataPath("imus13.json")))["imus"];
+  const std::string a = WriteSuit("suit_a", {set[0], set[1]}), b = WriteSuit("suit_b", {set[2]});
+  Session s;
+  std::string error;
+  ASSERT_TRUE(LoadSession(
+      WriteSession({{"people", 2},
+                    {"suits",
+                     {{{"imus", a}},
+                      {{"imus", b}, {"skeleton", testing::DataPath("skeleton_default.json")}}}}}),
+      &s, &error))
+      << error;
+  ASSERT_EQ(s.suits.size(), 2u);
+  EXPECT_EQ(s.suits[0].sensors, (std::vector<int>{0, 1}));
+  EXPECT_EQ(s.suits[1].sensors, (std::vector<int>{2}));
+  EXPECT_EQ(s.suits[1].calibration.imus[0].name, set[2]["name"].get<std::string>());
+  json stranger = set[0];
+  stranger["name"] = "nosuch";
+  const std::vector<std::pair<json, std::string>> cases = {
+      {{{"suits", {{{"imus", a}}}}}, "suits are for a session of several people"},
+      {{{"people", 2}, {"suits", {{{"imus", a}}, {{"imus", a}}}}}, "is in two suits"},
+      {{{"people", 2}, {"suits", {{{"imus", WriteSuit("suit_c", {stranger})}}}}},
+       "sensor 'nosuch' is not in the IMU set"},
+      {{{"people", 2}, {"suits", {{{"imus", a}, {"colour", "red"}}}}}, "unknown key 'colour'"},
+      {{{"people", 2}, {"suits", {{"imus", a}}}}, "suits is a list"},
+  };
+  for (const auto& [extra, message] : cases) {
+    EXPECT_FALSE(LoadSession(WriteSession(extra), &s, &error)) << extra.dump();
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
 TEST(Session, AnUnknownKeyIsAnErrorNamingIt) {
   const std::vector<std::pair<json, std::string>> cases = {
       {{{"solver", {{"velocity_gian", 0.5}}}}, "'velocity_gian'"},

@@ -119,7 +119,8 @@ def stream_health(s: dict) -> bytes:
 
 def people(p: dict) -> bytes:
     return b"".join(vint(1 + i, int(p.get(c, 0)))
-                    for i, c in enumerate(["tracked", "born", "retired", "foundAgain", "viewsDropped", "viewsUnexplained"]))
+                    for i, c in enumerate(["tracked", "born", "retired", "foundAgain", "viewsDropped", "viewsUnexplained",
+                                           "suitsWorn", "suitChanges", "suitsDoubted"]))
 
 
 def health(m: dict) -> bytes:
@@ -196,7 +197,7 @@ VECTORS = {
         "streams": [{"stream": "camera/cam1", "active": True, "rateHz": 60.0, "received": "180"}],
         "framesSolved": "180",
         "people": {"tracked": 2, "born": "3", "retired": "1", "foundAgain": "2", "viewsDropped": "5",
-                   "viewsUnexplained": "40"}}, None),
+                   "viewsUnexplained": "40", "suitsWorn": 2, "suitChanges": "2", "suitsDoubted": "1"}}, None),
     "calibration": ("mocap.v1.Calibration", {
         "source": "calibrator", "sequence": "2", "validFromNs": "1763900012000000000",
         "skeletonJson": '{"format": "mocap.skeleton/1", "bones": []}',

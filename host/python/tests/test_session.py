@@ -99,6 +99,8 @@ def test_every_sync_key_reaches_mocapd(session, tmp_path, key):
     ({"people": 0}, "people must be a whole number from 1 to 8"),
     ({"people": 9}, "people must be a whole number from 1 to 8"),
     ({"people": True}, "people must be a whole number from 1 to 8"),
+    ({"suits": [{"imus": "suit.json"}]}, "suits are for several people"),
+    ({"people": 2, "suits": [{"imus": "suit.json", "colour": "red"}]}, "suits are for several people, each"),
 ])
 def test_what_mocapd_refuses_the_reader_refuses(session, tmp_path, edit, message):
     path = tmp_path / "session.json"

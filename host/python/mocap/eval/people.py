@@ -25,6 +25,8 @@ import numpy as np
 from mocap import _core, paths
 from mocap.io.session import Session
 from mocap.model import joint_centres
+from mocap.model.solver import imu_set_json
+from mocap.net import wire
 from mocap.model import prior as pose_prior
 from mocap.recording import offline
 from mocap.sim import messages as sim_messages
@@ -78,25 +80,42 @@ def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOp
     return frames, tracker.counts
 
 
-def solve_as_mocapd(scene: sim_people.Scene, folder: Path) -> list[dict]:
-    """The scene's camera frames (every person each camera found) solved by the live host's
-    pipeline (what mocapd runs) in a session of as many people, video only: per frame
-    {subject_id: (theta, cameras, -1)}, as track() gives."""
+def solve_as_mocapd(scene: sim_people.Scene, folder: Path, suits: bool = False) -> tuple[list[dict], object]:
+    """The scene's messages (every person each camera found; suits: each performer's suit's
+    batches) solved by the live host's pipeline (what mocapd runs) in a session of as many
+    people (suits: each suit's sensors and oracle calibration in it): per frame
+    {subject_id: (theta, cameras, suit)} as track() gives (suit: -1, or the performer whose
+    suit the PoseFrame lists), and the host's last Health."""
     first = scene.performers[0]
     skeleton, _ = nominal(first.layout.name)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "skeleton.json").write_text(skeleton.to_json())
     (folder / "rig.json").write_text(first.rig.to_json())
-    (folder / "imus.json").write_text(json.dumps({"format": "mocap.imus/1", "imus": []}))
+    worn, every = [], []
+    for p, t in enumerate(scene.performers if suits else []):
+        sites = [_renamed(s, sim_messages.suit_sensor(p, s.name)) for s in t.imus]
+        (folder / f"suit{p}_skeleton.json").write_text(t.skeleton.to_json())
+        (folder / f"suit{p}_imus.json").write_text(json.dumps(imu_set_json(t.skeleton, sites)))
+        worn.append({"imus": f"suit{p}_imus.json", "skeleton": f"suit{p}_skeleton.json"})
+        every += [_renamed(s, s.name) for s in sites]
+    (folder / "imus.json").write_text(json.dumps(imu_set_json(skeleton, every)))
     session = Session("skeleton.json", "rig.json", str(paths.LAYOUTS / f"{first.layout.name}.json"), "imus.json",
                       ["scene"], "scene", prior=str(paths.HOST_DATA / "prior_default.json"),
-                      people=len(scene.performers), base=folder).save(folder / "session.json")
-    poses = offline.solve_messages(offline.pipeline_for(session), sim_messages.scene_messages(scene))
+                      people=len(scene.performers), suits=worn, base=folder).save(folder / "session.json")
+    pipeline = offline.pipeline_for(session)
+    poses = offline.solve_messages(pipeline, sim_messages.scene_messages(scene, suits))
     index = {t: f for f, t in enumerate(sim_messages.frame_times_ns(first))}
     frames: list[dict] = [{} for _ in scene.persons]
-    for p in poses:
-        frames[index[p.capture_time_ns]][p.subject_id] = (np.array(p.theta), list(p.cameras), -1)
-    return frames
+    for pose in poses:
+        suit = int(pose.imus[0].split("_")[0][1:]) if pose.imus else -1
+        frames[index[pose.capture_time_ns]][pose.subject_id] = (np.array(pose.theta), list(pose.cameras), suit)
+    return frames, wire.Health.FromString(pipeline.health(max(index)))
+
+
+def _renamed(site: _core.ImuSite, name: str) -> _core.ImuSite:
+    out = _core.ImuSite()
+    out.name, out.bone, out.mount, out.offset, out.reference = name, site.bone, site.mount, site.offset, site.reference
+    return out
 
 
 def _centres(skeleton: _core.Skeleton, theta: np.ndarray) -> np.ndarray:

@@ -128,7 +128,10 @@ class Session:
     solver: dict[str, Any] = dataclasses.field(default_factory=dict)
     imus_calibrated: bool = True  # False: mocapd waits for a Calibration before using the IMUs
     curve: CurveSettings | None = None  # None: streams without keys
-    people: int = 1  # the most performers solved at once (above 1: from video, one PoseFrame each)
+    people: int = 1  # the most performers solved at once (above 1: one PoseFrame each)
+    # Several people: the suits that may be worn, {"imus": file, "skeleton": file (optional)} each
+    # (mocapd finds who wears which from motion).
+    suits: list[dict[str, str]] = dataclasses.field(default_factory=list)
     base: Path = dataclasses.field(default=Path("."), compare=False)  # not written
 
     def file(self, key: str) -> Path | None:
@@ -176,6 +179,8 @@ class Session:
             out["curve"] = self.curve.to_json()
         if self.people != 1:
             out["people"] = self.people
+        if self.suits:
+            out["suits"] = [dict(s) for s in self.suits]
         return out
 
     def dumps(self) -> str:
@@ -192,7 +197,7 @@ class Session:
         """A session from its JSON object; InputError names what mocapd would refuse."""
         if not isinstance(data, dict):
             raise InputError(f"{where}: a session is a JSON object")
-        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated", "curve", "people")
+        known = ("format", *FILES, "inputs", "output", "sync", "solver", "imus_calibrated", "curve", "people", "suits")
         unknown = [key for key in data if key not in known]
         if unknown:
             raise InputError(f"{where}: unknown session key '{unknown[0]}'")
@@ -204,7 +209,7 @@ class Session:
         session = cls(data["skeleton"], data["rig"], data["layout"], data["imus"], list(data["inputs"]),
                       data["output"], data.get("prior"), SyncSettings.from_json(data.get("sync", {}), where),
                       dict(data.get("solver", {})), data.get("imus_calibrated", True), None, data.get("people", 1),
-                      Path(base))
+                      list(data.get("suits", [])), Path(base))
         session._check(where)
         if "curve" in data:
             session.curve = CurveSettings.from_json(data["curve"], session.inputs, where)
@@ -231,6 +236,11 @@ class Session:
             raise InputError(f"{where}: imus_calibrated is true or false")
         if not isinstance(self.people, int) or isinstance(self.people, bool) or not 1 <= self.people <= MAX_PEOPLE:
             raise InputError(f"{where}: people must be a whole number from 1 to {MAX_PEOPLE}")
+        suit_keys = {"imus", "skeleton"}
+        if self.suits and (self.people < 2 or not all(
+                isinstance(s, dict) and "imus" in s and set(s) <= suit_keys and all(isinstance(v, str) for v in s.values())
+                for s in self.suits)):
+            raise InputError(f"{where}: suits are for several people, each {{\"imus\": file, \"skeleton\": file}}")
         SyncSettings.from_json(self.sync.to_json(), where)
         _parse_solver(self.solver, where)
         if self.curve is not None:

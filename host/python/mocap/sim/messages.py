@@ -39,16 +39,27 @@ def messages(t: Take) -> list[tuple[int, str, bytes]]:
     return [wire.arrived(arrival, m) for arrival, m in out]
 
 
-def scene_messages(scene) -> list[tuple[int, str, bytes]]:
+def scene_messages(scene, suits: bool = False) -> list[tuple[int, str, bytes]]:
     """(arrival ns, type name, payload) of a scene of several performers (mocap.sim.people):
-    each camera's frame with every person it found, in its own order (no IMUs)."""
+    each camera's frame with every person it found, in its own order; suits: then each
+    performer's suit's batch (hub "suitP", sensors "pP_NAME": suit_sensor)."""
     first = scene.performers[0]
     out = []
     for f, (time_ns, seen) in enumerate(zip(frame_times_ns(first), scene.persons)):
         for c, cam in enumerate(first.rig.cameras):
             persons = None if seen is None else seen[c]
             out.append(wire.arrived(time_ns, host_frames.camera_frame(cam, f, time_ns, first.layout.name, persons)))
+        for p, t in enumerate(scene.performers if suits else []):
+            batch = _batch(t, f, time_ns)
+            batch.hub_id = f"suit{p}"
+            for s in batch.samples:
+                s.sensor_id = suit_sensor(p, s.sensor_id)
+            out.append(wire.arrived(time_ns, batch))
     return out
+
+
+def suit_sensor(performer: int, name: str) -> str:
+    return f"p{performer}_{name}"
 
 
 def frame_times_ns(t: Take) -> list[int]:
