@@ -78,16 +78,16 @@ class SuitMatcherTest : public ::testing::Test {
     for (int s = 0; s < 2; ++s) suits_.push_back(MakeSuit(scene_, &rng_));
   }
 
-  // Frames [first, last): subjects 1-3 perform motions 0-2; suit s is worn by performer
-  // worn_by[s]; motion scaled by `scale` (0: everyone still).
+  // Frames [first, last): subjects 1-3 perform motions 0-2 (a fourth, if any, is out of view); suit
+  // s is worn by performer worn_by[s]; motion scaled by `scale` (0: everyone still).
   void Run(SuitMatcher* matcher, int first, int last, const std::vector<int>& worn_by,
            double scale = 1.0) {
     for (int f = first; f < last; ++f) {
-      std::vector<BodyPose> truth(3);
+      std::vector<BodyPose> truth(motions_.size());  // beyond the third: out of view
       std::map<uint32_t, BodyPose> solved;
-      for (int p = 0; p < 3; ++p) {
+      for (size_t p = 0; p < motions_.size(); ++p) {
         ForwardKinematics(scene_.skeleton, motions_[p].At(f * kDt, scale).data(), &truth[p]);
-        solved[p + 1] = Noisy(truth[p], 3.0, &rng_);
+        if (p < 3) solved[p + 1] = Noisy(truth[p], 3.0, &rng_);
       }
       std::vector<std::vector<Eigen::Quaterniond>> readings;
       for (size_t s = 0; s < suits_.size(); ++s)
@@ -128,6 +128,17 @@ TEST_F(SuitMatcherTest, SuitsSwappedBetweenTheirWearersAreFoundOnTheNewOnes) {
   Run(&matcher, 240, 480, {0, 2});  // swapped at 4 s
   EXPECT_EQ(matcher.wearers(), (std::vector<uint32_t>{1, 3}));
   EXPECT_EQ(matcher.changes(), 2u);
+}
+
+TEST_F(SuitMatcherTest, ASuitNobodyInViewWearsStaysOnNobody) {
+  // Suit 0 on a fourth person the cameras do not see (a motion of their own), suit 1 on performer
+  // 0.
+  motions_.emplace_back(scene_.skeleton.pose_dim(), &rng_);
+  SuitMatcher matcher(Bones(), SuitMatchOptions{});
+  Run(&matcher, 0, 300, {3, 0});
+  EXPECT_EQ(matcher.wearers(), (std::vector<uint32_t>{0, 1}));
+  for (const auto& [id, d] : matcher.Disagreements(0))
+    EXPECT_GT(d, SuitMatchOptions{}.gate_rad) << id;
 }
 
 TEST_F(SuitMatcherTest, AWearerWhoLeavesLeavesTheSuitOnNobody) {
