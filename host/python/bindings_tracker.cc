@@ -77,7 +77,15 @@ void BindTrackerOptions(py::module_& m) {
       .def_property(
           "suit_window_s", [](const TrackerOptions& o) { return o.suits.window_s; },
           [](TrackerOptions& o, double s) { o.suits.window_s = s; },
-          "how much of the take a suit's agreement with a subject is measured over, s");
+          "how much of the take a suit's agreement with a subject is measured over, s")
+      .def_property(
+          "suit_gate_rad", [](const TrackerOptions& o) { return o.suits.gate_rad; },
+          [](TrackerOptions& o, double g) { o.suits.gate_rad = g; },
+          "a suit disagreeing more than this with every subject is on nobody, rad")
+      .def_property(
+          "suit_margin_rad", [](const TrackerOptions& o) { return o.suits.margin_rad; },
+          [](TrackerOptions& o, double m) { o.suits.margin_rad = m; },
+          "a suit's wearer beats every alternative by this, rad");
 }
 
 }  // namespace
