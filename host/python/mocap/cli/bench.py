@@ -9,7 +9,7 @@ import math
 from pathlib import Path
 
 from mocap.batch import bench as batch_bench
-from mocap.demo import drill, monitor_bench, record_drill, soak, stage
+from mocap.demo import drill, monitor_bench, people_stage, record_drill, soak, stage
 from mocap.demo import score as live
 from mocap.errors import DataMissingError, InputError, MocapError
 from mocap.eval import bench, edge_detector, peer, people, scale_plot
@@ -76,8 +76,9 @@ def _whole_machine(args: argparse.Namespace) -> None:
             print(json.dumps(live.bench(args.live_seconds, not args.live_normal_priority, cameras)), flush=True)
     if "stage" in args.only:  # the live host before 32 cameras, fed by one replay process
         print(json.dumps(stage.bench(args.live_seconds, args.stage_cameras, not args.live_normal_priority)), flush=True)
-    if "multi" in args.only:  # the host's solve of 3 people, per frame, on both cores and on one
-        _line("multi", lambda: people.bench(seed=args.seed))
+    if "multi" in args.only:  # 3 people: the tracker's frame on both cores and on one, then mocapd live
+        _line("multi", lambda: {**people.bench(seed=args.seed),
+                                "live": people_stage.bench(seed=args.seed, realtime=not args.live_normal_priority)})
     if "monitor" in args.only:  # the live benchmark with the live view open in headless Chromium
         _line("monitor", lambda: monitor_bench.bench(args.monitor_seconds, realtime=not args.live_normal_priority,
                                                      screenshot=Path(args.screenshot) if args.screenshot else None))

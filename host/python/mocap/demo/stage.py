@@ -47,17 +47,16 @@ def _offset_ns(studio: Studio, poses: list) -> int:
     return max((first - int(f) for f in frame_ns[:10]), key=lambda off: sum(int(f) + off in captured for f in frame_ns))
 
 
-def _run(studio: Studio, recording: Path, realtime: bool) -> play.Run:
-    """mocapd on the session with the replay's endpoint as its one input, the replay, and the
-    poses it published until its duration ran out."""
+def replayed(session: Path, output: str, recording: Path, duration_s: float, realtime: bool) -> tuple[list, list, dict]:
+    """mocapd on `session` with one input, `mocap replay --restamp` of `recording` (bound on a
+    free port, the session's inputs replaced by it), for duration_s: the poses and Health it
+    published on `output` and its summary."""
     endpoint = f"tcp://127.0.0.1:{free_ports(1)[0]}"
-    session = dataclasses.replace(Session.load(studio.session), inputs=[endpoint])
-    path = session.save(studio.session.parent / "session_replayed.json")
+    path = dataclasses.replace(Session.load(session), inputs=[endpoint]).save(session.parent / "session_replayed.json")
     priority = ["--realtime", str(play.REALTIME_PRIORITY)] if realtime else []
-    duration = float(studio.frame_times[-1]) + START_S
-    host = subprocess.Popen([str(play.MOCAPD), str(path), "--duration", f"{duration:.3f}", "--quiet", *priority],
+    host = subprocess.Popen([str(play.MOCAPD), str(path), "--duration", f"{duration_s:.3f}", "--quiet", *priority],
                             stdout=subprocess.PIPE, text=True)
-    sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=None)
+    sub = transport.subscriber(zmq.Context.instance(), [output], keys=None)
     replayer = subprocess.Popen([sys.executable, "-m", "mocap.cli", "replay", str(recording), "--bind", endpoint,
                                  "--restamp"], stdout=subprocess.DEVNULL)
     try:
@@ -71,7 +70,14 @@ def _run(studio: Studio, recording: Path, realtime: bool) -> play.Run:
                 p.terminate()
             p.wait(timeout=10)
         sub.close()
-    return play.Run(poses, healths, json.loads(lines[-1]), _offset_ns(studio, poses))
+    return poses, healths, json.loads(lines[-1])
+
+
+def _run(studio: Studio, recording: Path, realtime: bool) -> play.Run:
+    """mocapd on the studio's session fed by the replay, and the poses it published."""
+    duration = float(studio.frame_times[-1]) + START_S
+    poses, healths, summary = replayed(studio.session, studio.endpoints["host"], recording, duration, realtime)
+    return play.Run(poses, healths, summary, _offset_ns(studio, poses))
 
 
 def bench(seconds: float = 60.0, cameras: int = 32, realtime: bool = True) -> dict:

@@ -80,12 +80,10 @@ def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOp
     return frames, tracker.counts
 
 
-def solve_as_mocapd(scene: sim_people.Scene, folder: Path, suits: bool = False) -> tuple[list[dict], object]:
-    """The scene's messages (every person each camera found; suits: each performer's suit's
-    batches) solved by the live host's pipeline (what mocapd runs) in a session of as many
-    people (suits: each suit's sensors and oracle calibration in it): per frame
-    {subject_id: (theta, cameras, suit)} as track() gives (suit: -1, or the performer whose
-    suit the PoseFrame lists), and the host's last Health."""
+def write_session(scene: sim_people.Scene, folder: Path, suits: bool, inputs: list[str], output: str) -> Path:
+    """A session of as many people as the scene has, in `folder` (the default skeleton, the
+    told rig, the scene's layout; suits: each performer's suit, its sensors "pP_NAME" with
+    their oracle calibration on the performer's skeleton)."""
     first = scene.performers[0]
     skeleton, _ = nominal(first.layout.name)
     folder.mkdir(parents=True, exist_ok=True)
@@ -100,16 +98,31 @@ def solve_as_mocapd(scene: sim_people.Scene, folder: Path, suits: bool = False) 
         every += [_renamed(s, s.name) for s in sites]
     (folder / "imus.json").write_text(json.dumps(imu_set_json(skeleton, every)))
     session = Session("skeleton.json", "rig.json", str(paths.LAYOUTS / f"{first.layout.name}.json"), "imus.json",
-                      ["scene"], "scene", prior=str(paths.HOST_DATA / "prior_default.json"),
-                      people=len(scene.performers), suits=worn, base=folder).save(folder / "session.json")
-    pipeline = offline.pipeline_for(session)
-    poses = offline.solve_messages(pipeline, sim_messages.scene_messages(scene, suits))
-    index = {t: f for f, t in enumerate(sim_messages.frame_times_ns(first))}
+                      inputs, output, prior=str(paths.HOST_DATA / "prior_default.json"),
+                      people=len(scene.performers), suits=worn, base=folder)
+    return session.save(folder / "session.json")
+
+
+def by_frame(scene: sim_people.Scene, poses: list, offset_ns: int = 0) -> list[dict]:
+    """PoseFrames of the scene (capture times moved by offset_ns) as track() gives frames:
+    {subject_id: (theta, cameras, suit)}, suit the performer whose suit's sensors it lists."""
+    index = {t + offset_ns: f for f, t in enumerate(sim_messages.frame_times_ns(scene.performers[0]))}
     frames: list[dict] = [{} for _ in scene.persons]
     for pose in poses:
-        suit = int(pose.imus[0].split("_")[0][1:]) if pose.imus else -1
-        frames[index[pose.capture_time_ns]][pose.subject_id] = (np.array(pose.theta), list(pose.cameras), suit)
-    return frames, wire.Health.FromString(pipeline.health(max(index)))
+        if pose.capture_time_ns in index:
+            suit = int(pose.imus[0].split("_")[0][1:]) if pose.imus else -1
+            frames[index[pose.capture_time_ns]][pose.subject_id] = (np.array(pose.theta), list(pose.cameras), suit)
+    return frames
+
+
+def solve_as_mocapd(scene: sim_people.Scene, folder: Path, suits: bool = False) -> tuple[list[dict], object]:
+    """The scene's messages (every person each camera found; suits: each performer's suit's
+    batches) solved by the live host's pipeline (what mocapd runs) in one process, a session
+    of write_session: its frames as by_frame gives them, and the host's last Health."""
+    pipeline = offline.pipeline_for(write_session(scene, folder, suits, ["scene"], "scene"))
+    poses = offline.solve_messages(pipeline, sim_messages.scene_messages(scene, suits))
+    last_ns = sim_messages.frame_times_ns(scene.performers[0])[-1]
+    return by_frame(scene, poses), wire.Health.FromString(pipeline.health(last_ns))
 
 
 def _renamed(site: _core.ImuSite, name: str) -> _core.ImuSite:
