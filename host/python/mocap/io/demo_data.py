@@ -103,16 +103,7 @@ def fetch_batch(dest: Path = BATCH_CACHE) -> Path:
     """Pose2Sim's batch demo (pose2sim 0.10.49, Demo_Batch): Trial_1/ and Trial_2/, four videos
     each (videos/camNN.mp4, 100 frames at 60 fps, 1080 x 1920), beside calibration/Calib.qca.txt
     (Qualisys), as Pose2Sim lays out a batch; downloaded (~40 MB) only when incomplete."""
-    if (dest / TRIAL_DONE).is_file():
-        return dest
-    with _wheel("pose2sim==0.10.49", dest) as z:
-        for member, name in BATCH_MEMBERS.items():
-            for m in [n for n in z.namelist() if n.startswith(member) and not n.endswith("/")]:
-                target = dest / name / m[len(member):] if member.endswith("/") else dest / name
-                target.parent.mkdir(parents=True, exist_ok=True)
-                target.write_bytes(z.read(m))
-    (dest / TRIAL_DONE).write_text("pose2sim 0.10.49 Demo_Batch\n")
-    return dest
+    return _fetch_folder(dest, BATCH_MEMBERS, "pose2sim 0.10.49 Demo_Batch")
 
 
 MULTI_CACHE = paths.REPO / ".cache" / "pose2sim-multiperson"
@@ -123,15 +114,21 @@ def fetch_multiperson(dest: Path = MULTI_CACHE) -> Path:
     """Pose2Sim's multi-person demo (pose2sim 0.10.49, Demo_MultiPerson): videos/camNN.mp4 (four
     cameras, 100 frames at 60 fps, 1088 x 1920, two people) and calibration/Calib.qca.txt
     (Qualisys); downloaded (~40 MB wheel) only when incomplete."""
+    return _fetch_folder(dest, MULTI_MEMBERS, "pose2sim 0.10.49 Demo_MultiPerson")
+
+
+def _fetch_folder(dest: Path, members: dict[str, str], done: str) -> Path:
+    """The pose2sim 0.10.49 wheel's members (a folder, ending "/", or a file) copied under dest
+    by their names, once: `done` is written into its completion mark."""
     if (dest / TRIAL_DONE).is_file():
         return dest
     with _wheel("pose2sim==0.10.49", dest) as z:
-        for member, name in MULTI_MEMBERS.items():
+        for member, name in members.items():
             for m in [n for n in z.namelist() if n.startswith(member) and not n.endswith("/")]:
                 target = dest / name / m[len(member):] if member.endswith("/") else dest / name
                 target.parent.mkdir(parents=True, exist_ok=True)
                 target.write_bytes(z.read(m))
-    (dest / TRIAL_DONE).write_text("pose2sim 0.10.49 Demo_MultiPerson\n")
+    (dest / TRIAL_DONE).write_text(done + "\n")
     return dest
 
 
