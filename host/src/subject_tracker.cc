@@ -136,12 +136,12 @@ std::vector<SubjectFrame> SubjectTracker::Track(
   SolveAll(timestamp, people, suits);
   Births(timestamp, people, admitted, &owner);
   if (!suits_.empty()) MatchSuits(timestamp, suits);
-  Retire(timestamp);
-  if (assigned) {
+  if (assigned) {  // before Retire, which renumbers the subjects (a retired one has no views)
     assigned->assign(people.size(), 0);
     for (size_t p = 0; p < people.size(); ++p)
       if (owner[p] >= 0) (*assigned)[p] = subjects_[owner[p]]->id;
   }
+  Retire(timestamp);
   std::vector<SubjectFrame> out;
   for (const auto& s : subjects_) {
     std::vector<int> cameras;
