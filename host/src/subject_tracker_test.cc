@@ -179,6 +179,28 @@ TEST(SubjectTracker, ALostSubjectIsFoundAgainNearbyButRetiredWhenGoneTooLong) {
   EXPECT_EQ(tracker.counts().births, 2u);
 }
 
+TEST(SubjectTracker, ViewsAreNamedByTheirSubjectWhileAnotherIsRetired) {
+  const testing::Scene scene = MakeScene(4);
+  std::mt19937 rng(16);
+  const std::vector<Walker> walkers =
+      Walkers(scene, &rng, {{{-0.8, 0.0}, {0.0, 0.0}}, {{0.8, 0.0}, {0.0, 0.0}}});
+  TrackerOptions options;
+  options.retire_s = 0.5;
+  SubjectTracker tracker(Factory(scene), options);
+  TrackFrames(scene, &tracker, {walkers[0]}, 0, 10, &rng);  // walker 0: subject 1
+  TrackFrames(scene, &tracker, walkers, 10, 30, &rng);      // walker 1: subject 2
+  ASSERT_EQ(tracker.tracked(), 2);
+  for (int f = 30; f < 80; ++f) {  // walker 0 gone: retired 0.5 s on, walker 1 still seen
+    std::vector<int> who;
+    std::vector<uint32_t> assigned;
+    const auto people = Views(scene, {walkers[1].At(f)}, 1.0, &rng, &who);
+    tracker.Track(f * kDt, people, &assigned);
+    for (uint32_t a : assigned) EXPECT_EQ(a, 2u) << "frame " << f;
+  }
+  EXPECT_EQ(tracker.counts().retired, 1u);
+  EXPECT_EQ(tracker.tracked(), 1);
+}
+
 TEST(SubjectTracker, BadViewsAreCountedAndDroppedAndACrowdIsCapped) {
   const testing::Scene scene = MakeScene(4);
   std::mt19937 rng(15);
