@@ -85,7 +85,12 @@ void BindTrackerOptions(py::module_& m) {
       .def_property(
           "suit_margin_rad", [](const TrackerOptions& o) { return o.suits.margin_rad; },
           [](TrackerOptions& o, double m) { o.suits.margin_rad = m; },
-          "a suit's wearer beats every alternative by this, rad");
+          "a suit's wearer beats every alternative by this, rad")
+      .def_property(
+          "suit_lock_ratio", [](const TrackerOptions& o) { return o.suits.lock_ratio; },
+          [](TrackerOptions& o, double r) { o.suits.lock_ratio = r; },
+          "beyond the gate, a suit whose disagreement is below this fraction of chance (its turns "
+          "shifted in time) is admitted");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@ namespace mocap {
 namespace {
 
 constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
+constexpr int kChanceShifts = 8;  // chance: the suit's turns shifted by 1/8 ... 7/8 of the window
 
 double Median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -25,11 +26,12 @@ void DropBefore(double time, std::deque<T>* history) {
 
 bool SuitMatchOptions::IsValid(std::string* error) const {
   const bool ok = window_s > 0 && baseline_s > 0 && baseline_s < window_s && min_turn_rad >= 0 &&
-                  gate_rad > 0 && margin_rad >= 0 &&
+                  gate_rad > 0 && margin_rad >= 0 && lock_ratio >= 0 && lock_ratio <= 1 &&
                   std::isfinite(window_s + gate_rad + margin_rad);
   if (!ok && error)
     *error =
-        "window_s > baseline_s > 0, min_turn_rad >= 0, gate_rad > 0, margin_rad >= 0, all finite";
+        "window_s > baseline_s > 0, min_turn_rad >= 0, gate_rad > 0, margin_rad >= 0, "
+        "0 <= lock_ratio <= 1, all finite";
   return ok;
 }
 
@@ -86,17 +88,13 @@ void SuitMatcher::Add(double timestamp, const std::map<uint32_t, BodyPose>& bodi
       history[s].push_back(std::move(bones));
       DropBefore(keep_from, &history[s]);
       if (!sensors_turned || !bones_turned) continue;
-      std::vector<double> differences;
-      double most = 0;
-      for (size_t i = 0; i < sensor_turns.size(); ++i) {
-        if (std::isnan(sensor_turns[i]) || std::isnan(bone_turns[i])) continue;
-        differences.push_back(std::abs(sensor_turns[i] - bone_turns[i]));
-        most = std::max({most, sensor_turns[i], bone_turns[i]});
-      }
-      if (!differences.empty() && most >= options_.min_turn_rad)
-        pair.frames.emplace_back(timestamp, Median(differences));
-      while (!pair.frames.empty() && pair.frames.front().first < timestamp - options_.window_s)
-        pair.frames.pop_front();
+      double most = 0;  // NaN never compares greater
+      for (size_t i = 0; i < sensor_turns.size(); ++i)
+        if (!std::isnan(sensor_turns[i] + bone_turns[i]))
+          most = std::max({most, sensor_turns[i], bone_turns[i]});
+      if (most >= options_.min_turn_rad)
+        pair.frames.push_back(Turned{timestamp, sensor_turns, bone_turns});
+      DropBefore(timestamp - options_.window_s, &pair.frames);
     }
   }
   Decide(timestamp);
@@ -108,13 +106,39 @@ void SuitMatcher::Forget(int suit, uint32_t id) {
   if (suit >= 0 && suit < static_cast<int>(wearers_.size())) wearers_[suit] = 0;
 }
 
+double SuitMatcher::Disagreement(const Pair& pair, size_t shift) {
+  const size_t n = pair.frames.size();
+  double sum = 0;
+  int counted = 0;
+  std::vector<double> differences;
+  for (size_t f = 0; f < n; ++f) {
+    const std::vector<double>& sensors = pair.frames[(f + shift) % n].sensors;
+    const std::vector<double>& bones = pair.frames[f].bones;
+    differences.clear();
+    for (size_t i = 0; i < bones.size(); ++i)
+      if (!std::isnan(sensors[i] + bones[i]))
+        differences.push_back(std::abs(sensors[i] - bones[i]));
+    if (differences.empty()) continue;
+    sum += Median(differences);
+    counted++;
+  }
+  return counted ? sum / counted : NAN;
+}
+
+bool SuitMatcher::Admissible(const Pair& pair, double disagreement) const {
+  if (disagreement <= options_.gate_rad) return true;
+  const size_t n = pair.frames.size();
+  double chance = 0;
+  for (int k = 1; k < kChanceShifts; ++k) chance += Disagreement(pair, k * n / kChanceShifts);
+  return disagreement <= options_.lock_ratio * chance / (kChanceShifts - 1);
+}
+
 std::map<uint32_t, double> SuitMatcher::Disagreements(int suit) const {
   std::map<uint32_t, double> out;
   for (const auto& [key, pair] : pairs_) {
     if (key.first != suit || static_cast<int>(pair.frames.size()) < kMinMovingFrames) continue;
-    double sum = 0;
-    for (const auto& f : pair.frames) sum += f.second;
-    out[key.second] = sum / pair.frames.size();
+    const double d = Disagreement(pair, 0);
+    if (std::isfinite(d)) out[key.second] = d;
   }
   return out;
 }
@@ -140,22 +164,29 @@ bool SuitMatcher::Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to,
 void SuitMatcher::Decide(double timestamp) {
   std::vector<uint32_t> ids;
   for (const auto& [id, history] : subject_history_) ids.push_back(id);
+  // The admissible pairs' disagreements; every admissible pair may be made (the gate above
+  // them all), the cheapest total among the most pairs.
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(suit_bones_.size(), ids.size(), NAN);
+  std::vector<std::map<uint32_t, double>> admissible(suit_bones_.size());
+  double highest = options_.gate_rad;
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
-    const std::map<uint32_t, double> d = Disagreements(static_cast<int>(s));
+    for (const auto& [id, d] : Disagreements(static_cast<int>(s)))
+      if (Admissible(pairs_.at({static_cast<int>(s), id}), d)) admissible[s][id] = d;
     for (size_t j = 0; j < ids.size(); ++j) {
-      const auto it = d.find(ids[j]);
+      const auto it = admissible[s].find(ids[j]);
       const Pair& pair = pairs_.at({static_cast<int>(s), ids[j]});
-      if (it != d.end() && timestamp - pair.first >= options_.window_s) cost(s, j) = it->second;
+      if (it == admissible[s].end() || timestamp - pair.first < options_.window_s) continue;
+      cost(s, j) = it->second;
+      highest = std::max(highest, it->second);
     }
   }
-  const std::vector<int> to = AssignRows(cost, options_.gate_rad);
+  const std::vector<int> to = AssignRows(cost, 2 * highest);
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
     uint32_t& wearer = wearers_[s];
     if (wearer && !subject_history_.count(wearer)) wearer = 0;  // retired
-    if (to[s] < 0) {
-      const auto d = Disagreements(static_cast<int>(s));
-      if (wearer && d.count(wearer) && d.at(wearer) > options_.gate_rad) wearer = 0;
+    if (to[s] < 0) {  // its wearer's pair measured and no longer admissible: on nobody
+      const auto measured = Disagreements(static_cast<int>(s));
+      if (wearer && measured.count(wearer) && !admissible[s].count(wearer)) wearer = 0;
       continue;
     }
     if (!Clear(cost, to, static_cast<int>(s)) || wearer == ids[to[s]]) continue;

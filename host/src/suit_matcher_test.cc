@@ -1,7 +1,8 @@
 // Suits found on the people wearing them from motion alone: the sensors' mountings and
 // heading references are unknown to the matcher, the subjects' poses are noisy, yet each
 // suit is decided for its wearer once the window is full, nobody is decided while everyone
-// stands still, and two suits swapped between their wearers mid-take are found on their new
+// stands still, a wearer whose solve is poor is found all the same (by when their turns happen),
+// and two suits swapped between their wearers mid-take are found on their new
 // wearers (and counted).
 #include "mocap/suit_matcher.h"
 
@@ -87,7 +88,7 @@ class SuitMatcherTest : public ::testing::Test {
       std::map<uint32_t, BodyPose> solved;
       for (size_t p = 0; p < motions_.size(); ++p) {
         ForwardKinematics(scene_.skeleton, motions_[p].At(f * kDt, scale).data(), &truth[p]);
-        if (p < 3) solved[p + 1] = Noisy(truth[p], 3.0, &rng_);
+        if (p < 3) solved[p + 1] = Noisy(truth[p], noise_deg_, &rng_);
       }
       std::vector<std::vector<Eigen::Quaterniond>> readings;
       for (size_t s = 0; s < suits_.size(); ++s)
@@ -100,6 +101,7 @@ class SuitMatcherTest : public ::testing::Test {
 
   testing::Scene scene_;
   std::mt19937 rng_;
+  double noise_deg_ = 3.0;  // of the subjects' solves
   std::vector<Motion> motions_;
   std::vector<Suit> suits_;
 };
@@ -141,6 +143,24 @@ TEST_F(SuitMatcherTest, ASuitNobodyInViewWearsStaysOnNobody) {
     EXPECT_GT(d, SuitMatchOptions{}.gate_rad) << id;
 }
 
+TEST_F(SuitMatcherTest, AWearerSolvedPoorlyIsFoundByWhenTheirTurnsHappen) {
+  noise_deg_ = 10.0;  // every subject's bones: their turns over 0.1 s off by far more than the gate
+  SuitMatcher matcher(Bones(), SuitMatchOptions{});
+  Run(&matcher, 0, 200, {2, 0});
+  const auto d = matcher.Disagreements(0);
+  EXPECT_GT(d.at(3), SuitMatchOptions{}.gate_rad);
+  EXPECT_EQ(matcher.wearers(), (std::vector<uint32_t>{3, 1}));
+  EXPECT_EQ(matcher.changes(), 0u);
+}
+
+TEST_F(SuitMatcherTest, ASuitNobodyInViewWearsStaysOnNobodyWhenTheSolvesArePoor) {
+  noise_deg_ = 10.0;
+  motions_.emplace_back(scene_.skeleton.pose_dim(), &rng_);
+  SuitMatcher matcher(Bones(), SuitMatchOptions{});
+  Run(&matcher, 0, 300, {3, 0});
+  EXPECT_EQ(matcher.wearers(), (std::vector<uint32_t>{0, 1}));
+}
+
 TEST_F(SuitMatcherTest, AWearerWhoLeavesLeavesTheSuitOnNobody) {
   SuitMatcher matcher(Bones(), SuitMatchOptions{});
   Run(&matcher, 0, 200, {2, 0});
@@ -152,6 +172,9 @@ TEST_F(SuitMatcherTest, AWearerWhoLeavesLeavesTheSuitOnNobody) {
   EXPECT_THROW(matcher.Add(201 * kDt, {}, {}), std::invalid_argument);
   SuitMatchOptions bad;
   bad.baseline_s = 5.0;
+  EXPECT_THROW(SuitMatcher(Bones(), bad), std::invalid_argument);
+  bad = SuitMatchOptions{};
+  bad.lock_ratio = 1.5;
   EXPECT_THROW(SuitMatcher(Bones(), bad), std::invalid_argument);
 }
 

@@ -6,9 +6,12 @@
 // `baseline_s` are compared with those of the subject's bones as solved from video; the
 // median difference over the sensors, averaged over the frames of the last window_s in
 // which the body moved, is the pair's disagreement. Suits are assigned to subjects by least
-// disagreement (AssignRows, gated); a suit is worn by its subject once the window is full and
-// the assignment beats, by `margin`, every alternative that gives the suit to another subject
-// (swapping suits with that one's); it changes wearer only the same way.
+// disagreement (AssignRows, gated: within gate_rad, or time-locked: below lock_ratio times the
+// pair's disagreement by chance, the same with the suit's turns shifted in time over the
+// window; a wearer whose solve from video is poor disagrees beyond the gate, but far less than
+// by chance, which an unrelated motion does not); a suit is worn by its subject once the window is
+// full and the assignment beats, by `margin`, every alternative that gives the suit to another
+// subject (swapping suits with that one's); it changes wearer only the same way.
 #ifndef MOCAP_SUIT_MATCHER_H_
 #define MOCAP_SUIT_MATCHER_H_
 
@@ -30,6 +33,7 @@ struct SuitMatchOptions {
   double min_turn_rad = 0.05;  // frames where no bone or sensor turned this much say nothing
   double gate_rad = 0.15;      // a suit disagreeing more than this with every subject is on nobody
   double margin_rad = 0.03;    // the wearer's disagreement below every other subject's by this
+  double lock_ratio = 0.75;    // beyond the gate, a pair below this fraction of chance is admitted
   bool IsValid(std::string* error) const;
 };
 
@@ -63,10 +67,19 @@ class SuitMatcher {
     double time;
     std::vector<Eigen::Quaterniond> rotations;  // per sensor of the suit (a subject: its bones)
   };
-  struct Pair {
-    std::deque<std::pair<double, double>> frames;  // (time, median difference) of moving frames
-    double first = 0;                              // when the pair's history (re)started
+  struct Turned {  // a moving frame of a pair: the suit's and the bones' turn angles
+    double time;
+    std::vector<double> sensors, bones;
   };
+  struct Pair {
+    std::deque<Turned> frames;  // the moving frames of the window
+    double first = 0;           // when the pair's history (re)started
+  };
+  // The mean over the pair's frames of the median |sensor turn - bone turn|, the sensors' turns
+  // taken `shift` frames later (circularly); shift 0: the disagreement.
+  static double Disagreement(const Pair& pair, size_t shift);
+  // Whether the pair is admissible: within the gate, or time-locked (well below chance).
+  bool Admissible(const Pair& pair, double disagreement) const;
   // The turn angle of each sensor between the history's entry baseline_s ago and `now`
   // (NaN where either reading is missing); false when the history is too short.
   bool Turns(const std::deque<Timed>& history, const Timed& now, std::vector<double>* angles) const;

@@ -23,6 +23,12 @@ def test_subjects_are_matched_to_performers_by_the_most_pairs_then_the_least_dis
     assert people._match(np.zeros((2, 0))) == {}
 
 
+def test_errors_are_also_given_per_second_of_the_scene():
+    times = np.arange(0, 3.0, 0.5)  # frames at 0, 0.5, ..., 2.5 s
+    rows = [(0, 0.01), (1, 0.03), (4, 0.05), (5, 0.07)]  # (frame, error m): none in the second second
+    assert people._by_second(times, rows) == [2.0, None, 6.0]
+
+
 def test_three_walkers_crossing_keep_their_ids_and_their_accuracy(shared, tmp_path):
     clips = [shared / "data/mocap" / c for c in CLIPS]
     out = tmp_path / "people.json"

@@ -3,10 +3,11 @@ says, hiding each other from the cameras they stand in front of, and listed by e
 an order that says nothing of who they are."""
 
 import numpy as np
+import pytest
 
 from mocap import _core, paths, rotations
 from mocap.model import studio
-from mocap.sim import occlusion, people
+from mocap.sim import messages, occlusion, people
 from mocap.sim.take import Config
 
 CLIPS = ("cmu-131/131_01.bvh", "cmu-daz/07_03.bvh")  # test-split clips: a walk each
@@ -70,3 +71,10 @@ def test_a_scene_lists_who_each_camera_finds_in_an_order_of_its_own(shared):
             missing += len(who) < 3
     assert shuffled > frames  # the cameras' order is not the performers'
     assert missing > 0  # someone is hidden from some camera at some time
+
+
+def test_a_suit_sensors_name_says_whose_suit_it_is():
+    assert [messages.suit_of_sensor(messages.suit_sensor(p, "foot_l")) for p in (0, 3, 12)] == [0, 3, 12]
+    for bad in ("foot_l", "px_foot", "p_foot", ""):
+        with pytest.raises(ValueError, match="not a suit's sensor"):
+            messages.suit_of_sensor(bad)

@@ -25,9 +25,9 @@ import numpy as np
 from mocap import _core, paths
 from mocap.io.session import Session
 from mocap.model import joint_centres
+from mocap.model import prior as pose_prior
 from mocap.model.solver import imu_set_json
 from mocap.net import wire
-from mocap.model import prior as pose_prior
 from mocap.recording import offline
 from mocap.sim import messages as sim_messages
 from mocap.sim import people as sim_people
@@ -110,7 +110,7 @@ def by_frame(scene: sim_people.Scene, poses: list, offset_ns: int = 0) -> list[d
     frames: list[dict] = [{} for _ in scene.persons]
     for pose in poses:
         if pose.capture_time_ns in index:
-            suit = int(pose.imus[0].split("_")[0][1:]) if pose.imus else -1
+            suit = sim_messages.suit_of_sensor(pose.imus[0]) if pose.imus else -1
             frames[index[pose.capture_time_ns]][pose.subject_id] = (np.array(pose.theta), list(pose.cameras), suit)
     return frames
 
@@ -176,6 +176,7 @@ def score(scene: sim_people.Scene, frames: list[dict], worn: np.ndarray | None =
         own = [r[0] for r in rows if r[3] >= 0 and worn[r[0], r[3]] == p]
         out.append({"frames": len(frames), "frames_tracked": len(rows),
                     "joint_centres_pos_cm": round(100.0 * float(np.mean([r[1] for r in rows])), 2) if rows else None,
+                    "joint_centres_pos_cm_by_second": _by_second(times - times[0], rows),
                     "identity_swaps": int(np.count_nonzero(np.diff(ids))) if len(ids) > 1 else 0,
                     "ids": sorted(set(ids)),
                     "own_suit_from_s": round(float(times[own[0]] - times[0]), 2) if own else None,
@@ -183,6 +184,15 @@ def score(scene: sim_people.Scene, frames: list[dict], worn: np.ndarray | None =
                     "frames_with_another_suit": sum(1 for r in rows if r[3] >= 0 and worn[r[0], r[3]] != p),
                     "own_suit_frames": own})
     return out
+
+
+def _by_second(times: np.ndarray, rows: list) -> list:
+    """The mean error (cm) of the matched frames (rows: (frame, error m, ...)) in each second of
+    the scene, None for a second without any."""
+    seconds = [[] for _ in range(int(times[-1]) + 1)]
+    for row in rows:
+        seconds[int(times[row[0]])].append(row[1])
+    return [round(100.0 * float(np.mean(e)), 2) if e else None for e in seconds]
 
 
 def closest_approach(scene: sim_people.Scene) -> float | None:
@@ -207,6 +217,7 @@ def evaluate(clips: list[Path], people: int, seconds: float, config: Config, see
         alone = score(alone_scene, track(alone_scene, suits)[0])[0]
         result["clip"] = Path(clips[scene.placements[p].clip]).name
         result["alone_joint_centres_pos_cm"] = alone["joint_centres_pos_cm"]
+        result["alone_joint_centres_pos_cm_by_second"] = alone["joint_centres_pos_cm_by_second"]
         if result["joint_centres_pos_cm"] and alone["joint_centres_pos_cm"]:
             result["ratio_to_alone"] = round(result["joint_centres_pos_cm"] / alone["joint_centres_pos_cm"], 3)
         own = result.pop("own_suit_frames")

@@ -59,7 +59,16 @@ def scene_messages(scene, suits: bool = False) -> list[tuple[int, str, bytes]]:
 
 
 def suit_sensor(performer: int, name: str) -> str:
+    """The name of `performer`'s suit's sensor `name` in a session of several people."""
     return f"p{performer}_{name}"
+
+
+def suit_of_sensor(sensor: str) -> int:
+    """The performer whose suit a sensor named by suit_sensor is in."""
+    prefix, _, _ = sensor.partition("_")
+    if not (prefix.startswith("p") and prefix[1:].isdigit()):
+        raise ValueError(f"{sensor!r} is not a suit's sensor (pN_NAME)")
+    return int(prefix[1:])
 
 
 def frame_times_ns(t: Take) -> list[int]:
