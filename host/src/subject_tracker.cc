@@ -266,7 +266,8 @@ void SubjectTracker::Births(double timestamp, const std::vector<CameraObservatio
     Candidate next{centre, 1};
     for (size_t c = 0; c < candidates_.size(); ++c)
       if (!used[c] && (candidates_[c].centre - centre).norm() <= options_.birth_radius_m) {
-        next.frames = candidates_[c].frames + 1, used[c] = true;
+        next.frames = candidates_[c].frames + 1, next.refused = candidates_[c].refused;
+        used[c] = true;
         break;
       }
     explained += static_cast<int>(group.size());
@@ -279,8 +280,10 @@ void SubjectTracker::Births(double timestamp, const std::vector<CameraObservatio
       for (int g : group) members.push_back(entry[g]);
       return members;
     }());
-    if (s < 0) {
-      recurring.push_back(next);  // not solvable yet, or over the cap: tried again next frame
+    if (s < 0) {  // not solvable yet, or over the cap: tried again next frame
+      if (s == kRefused && !next.refused) counts_.births_refused++;  // a person once
+      next.refused = next.refused || s == kRefused;
+      recurring.push_back(next);
       continue;
     }
     for (int p : subjects_[s]->views) (*owner)[p] = s;
@@ -298,7 +301,7 @@ bool SubjectTracker::NearSeenSubject(const Eigen::Vector3d& centre, double times
 
 // The subject a recurring group of views (members, entries of people) is: a lost one last
 // seen within revive_radius_m of its centre, else a new one; solved from those views. The
-// subject's index, or -1 when none could be made (over the cap, or the solve failed).
+// subject's index, kRefused over the cap of subjects, or -1 when the solve failed.
 int SubjectTracker::Claim(const Eigen::Vector3d& centre, double timestamp,
                           const std::vector<CameraObservation>& people,
                           const std::vector<int>& members) {
@@ -312,10 +315,7 @@ int SubjectTracker::Claim(const Eigen::Vector3d& centre, double timestamp,
     if (subjects_[s]->last_seen < timestamp && d <= nearest)
       lost = static_cast<int>(s), nearest = d;
   }
-  if (lost < 0 && tracked() >= options_.max_subjects) {
-    counts_.births_refused++;
-    return -1;
-  }
+  if (lost < 0 && tracked() >= options_.max_subjects) return kRefused;
   std::unique_ptr<Solver> solver = make_solver_();
   if (!solver) return -1;
   SolveResult result = solver->Solve(frame);

@@ -228,6 +228,20 @@ TEST(SubjectTracker, BadViewsAreCountedAndDroppedAndACrowdIsCapped) {
   EXPECT_THROW(SubjectTracker(Factory(scene), options), std::invalid_argument);
 }
 
+TEST(SubjectTracker, APersonBeyondTheCapOfSubjectsIsRefusedAndCountedOnce) {
+  const testing::Scene scene = MakeScene(4);
+  std::mt19937 rng(16);
+  const std::vector<Walker> walkers =
+      Walkers(scene, &rng, {{{-0.8, 0.0}, {0.0, 0.0}}, {{0.8, 0.0}, {0.0, 0.0}}});
+  TrackerOptions options;
+  options.max_subjects = 1;
+  SubjectTracker tracker(Factory(scene), options);
+  TrackFrames(scene, &tracker, walkers, 0, 40, &rng);  // the second asks for a birth every frame
+  EXPECT_EQ(tracker.tracked(), 1);
+  EXPECT_EQ(tracker.counts().births, 1u);
+  EXPECT_EQ(tracker.counts().births_refused, 1u);
+}
+
 TEST(SubjectTracker, SuitsThatDoNotFitOrReadingsOfTooFewSuitsAreRefused) {
   const testing::Scene scene = MakeScene(4);
   SuitCalibration suit{scene.skeleton, scene.layout, scene.imus};

@@ -71,7 +71,7 @@ struct TrackerCounts {
   uint64_t revivals = 0;  // lost subjects found again
   uint64_t retired = 0;
   uint64_t people_dropped = 0;     // over max_people_per_camera, or too few keypoints
-  uint64_t births_refused = 0;     // over max_subjects
+  uint64_t births_refused = 0;     // people refused a birth over max_subjects, each once
   uint64_t views_unexplained = 0;  // people neither assigned nor in a group being born
   uint64_t suit_changes = 0;       // suits found on someone else than their last wearer
   // A suit taken off its wearer as the keypoints contradict half its sensors or more (the
@@ -120,7 +120,9 @@ class SubjectTracker {
   struct Candidate {
     Eigen::Vector3d centre;
     int frames = 0;
+    bool refused = false;  // a birth refused over the cap (counted once)
   };
+  static constexpr int kRefused = -2;  // Claim: over max_subjects
 
   std::vector<int> Admit(const std::vector<CameraObservation>& people);
   void Assign(const std::vector<CameraObservation>& people, const std::vector<int>& admitted,
