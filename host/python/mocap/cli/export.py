@@ -17,12 +17,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     ex.add_argument("--format", required=True, choices=sorted(FORMATS),
                     help="; ".join(f"{k}: {v}" for k, v in FORMATS.items()))
     ex.add_argument("--out", required=True, help="the file to write (gltf: a .glb)")
+    ex.add_argument("--subject", type=int, default=None, metavar="ID",
+                    help="a recording of several people: only this person (mocapd's subject id), written to OUT; "
+                    "default: every person, each to OUT's name with _subjectID before its suffix")
     ex.add_argument("--bvh-units", choices=sorted(BVH_UNITS), default="cm",
                     help="gltf from a BVH: its length unit (default cm, as `mocap solve` writes)")
     ex.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    summary = export(Path(args.solved), args.format, Path(args.out), args.bvh_units)
+    summary = export(Path(args.solved), args.format, Path(args.out), args.bvh_units, args.subject)
     print(json.dumps({"out": args.out, "format": args.format, **summary}), flush=True)
     return 0

@@ -1,7 +1,12 @@
 """What mocapd published during a recorded take: the PoseFrames on /pose (the live solve, as the
 recorder received it) and the skeleton they were solved with — the latest calibration's recorded
 on /calibration/* (the live calibrator's), else the attached session's. `mocap export` writes a
-recorded take from them without solving it again."""
+recorded take from them without solving it again.
+
+A take of several people (a session with "people" above 1) has one PoseFrame per person and
+frame, each with its subject id: `subjects()` lists them and `of(id)` is one person's take, with
+the skeleton of the suit they wore last (the suit whose sensors their PoseFrames list), else the
+session's."""
 
 from __future__ import annotations
 
@@ -22,9 +27,26 @@ POSE_TOPIC = "/pose"
 
 @dataclasses.dataclass
 class Published:
-    poses: list  # wire.PoseFrame, in capture order, each frame once
+    poses: list  # wire.PoseFrame, in capture order, each frame once per subject
     skeleton: _core.Skeleton | None  # None: neither a calibration nor a session says it
     integrity: reader.Integrity
+    suits: list = dataclasses.field(default_factory=list)  # several people: (sensor names, skeleton) per suit
+
+    def subjects(self) -> list[int]:
+        """The subject ids of the poses, in order (one person: [0])."""
+        return sorted({p.subject_id for p in self.poses})
+
+    def of(self, subject: int) -> Published:
+        """Subject `subject`'s poses, with the skeleton of the suit they wore last (else the take's)."""
+        poses = [p for p in self.poses if p.subject_id == subject]
+        if not poses:
+            raise InputError(f"no subject {subject} in this take (subjects: {', '.join(map(str, self.subjects()))})")
+        skeleton = self.skeleton
+        worn = next((set(p.imus) for p in reversed(poses) if p.imus), set())
+        for names, suit_skeleton in self.suits:
+            if worn and worn <= names:
+                skeleton = suit_skeleton
+        return Published(poses, skeleton, self.integrity)
 
     def positions(self) -> np.ndarray:
         """(F, J, 3) m: the joints as published, each frame with the calibration it was solved with."""
@@ -53,29 +75,42 @@ def _decoded(message: reader.RecordedMessage):
 
 def read(path: str | Path) -> Published:
     """The published poses of recording `path`; InputError when it has none."""
-    poses: dict[int, wire.PoseFrame] = {}
+    poses: dict[tuple[int, int], wire.PoseFrame] = {}  # by (capture time, subject)
     latest_skeleton: tuple[int, str] | None = None
     with reader.Recording(path) as recording:
         for message in recording.messages():
             if message.topic == POSE_TOPIC and isinstance(pose := _decoded(message), wire.PoseFrame):
-                poses.setdefault(pose.capture_time_ns, pose)
+                poses.setdefault((pose.capture_time_ns, pose.subject_id), pose)
             elif message.topic.startswith("/calibration/") and isinstance(c := _decoded(message), wire.Calibration):
                 if c.skeleton_json and (latest_skeleton is None or c.valid_from_ns >= latest_skeleton[0]):
                     latest_skeleton = (c.valid_from_ns, c.skeleton_json)
         if not poses:
             raise InputError(f"{path}: no solved poses ({POSE_TOPIC}) in this recording: record mocapd's output "
                              "with the inputs, or solve the inputs first (`mocap solve --recording`)")
-        skeleton = _skeleton(recording, latest_skeleton)
-    ordered = [poses[t] for t in sorted(poses)]
-    return Published(ordered, skeleton, recording.integrity)
+        skeleton, suits = _skeletons(recording, latest_skeleton)
+    ordered = [poses[key] for key in sorted(poses)]
+    return Published(ordered, skeleton, recording.integrity, suits)
 
 
-def _skeleton(recording: reader.Recording, calibrated: tuple[int, str] | None) -> _core.Skeleton | None:
+def _skeletons(recording: reader.Recording, calibrated: tuple[int, str] | None) -> tuple:
+    """The take's skeleton (the latest calibration's, else the attached session's; None for
+    neither) and the attached session's suits: (their sensors' names, their skeleton) each."""
     try:
-        if calibrated is not None:
-            return _core.Skeleton.from_json(calibrated[1])
         with tempfile.TemporaryDirectory() as folder:
-            session = recording.session(folder)
-            return None if session is None else _core.Skeleton.load(str(Session.load(session).file("skeleton")))
+            try:
+                found = recording.session(folder)
+            except InputError:
+                if calibrated is None:
+                    raise
+                found = None  # the calibration recorded says the skeleton; no suits then
+            session = None if found is None else Session.load(found)
+            skeleton = _core.Skeleton.from_json(calibrated[1]) if calibrated is not None else (
+                None if session is None else _core.Skeleton.load(str(session.file("skeleton"))))
+            suits = []
+            for suit in session.suits if session is not None else []:
+                worn = _core.Skeleton.load(str(session.base / suit["skeleton"])) if "skeleton" in suit else skeleton
+                names = {site.name for site in _core.load_imu_sites(str(session.base / suit["imus"]), worn)}
+                suits.append((names, worn))
+            return skeleton, suits
     except ValueError as e:
         raise InputError(f"{recording.path}: its skeleton cannot be read ({e})") from None

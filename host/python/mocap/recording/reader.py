@@ -161,10 +161,11 @@ class Recording:
         """The attached session may name only files attached beside it: a path elsewhere (absolute,
         `..`) would have a recording read the host's own files."""
         config = Session.load(session)
-        for key in FILES:
-            name = getattr(config, key)
+        named = [(key, getattr(config, key)) for key in FILES]
+        named += [(f"suit {n}'s {key}", name) for n, suit in enumerate(config.suits) for key, name in suit.items()]
+        for what, name in named:
             if name is not None and (Path(name).name != name or not (session.parent / name).is_file()):
-                raise InputError(f"{self.path}: the attached session names {key} {name!r}, which is not one of "
+                raise InputError(f"{self.path}: the attached session names {what} {name!r}, which is not one of "
                                  "its attachments; give the session with --session")
 
     def close(self) -> None:

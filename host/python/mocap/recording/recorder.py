@@ -187,7 +187,7 @@ class Recorder:
 
     def attach_session(self, session: str | Path) -> None:
         """Attaches the session file and the files it names (skeleton, rig, layout, IMU set,
-        prior), so that the recording can be solved without them (reader.read_session). Its
+        prior, the suits' IMU sets and skeletons), so that the recording can be solved without them (reader.read_session). Its
         "curve" keys are left out: they are the live streams', and the host's secret key file
         is never copied into a recording."""
         config = Session.load(session)
@@ -199,7 +199,13 @@ class Recorder:
             if source is not None:
                 self._attach(f"session/{key}.json", source.read_bytes())
                 renamed[key] = f"{key}.json"
-        self._attach("session/session.json", dataclasses.replace(config, curve=None, **renamed).dumps().encode())
+        suits = []  # several people: each suit's IMU set and skeleton, renamed suitN_KEY.json
+        for n, suit in enumerate(config.suits):
+            suits.append({key: f"suit{n}_{key}.json" for key in suit})
+            for key, name in suit.items():
+                self._attach(f"session/suit{n}_{key}.json", (config.base / name).read_bytes())
+        attached = dataclasses.replace(config, curve=None, suits=suits, **renamed)
+        self._attach("session/session.json", attached.dumps().encode())
         self._file.flush()
 
     def _attach(self, name: str, data: bytes) -> None:

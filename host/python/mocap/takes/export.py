@@ -2,7 +2,8 @@
 and Pose2Sim, C3D and CSV (the joint positions), binary glTF for animation tools and BVH (the
 motion). A solve is `mocap solve --take`'s output folder, one of its files (a joint-position
 CSV, a BVH), or a recording of a live take (MCAP with mocapd's poses: the poses as published,
-not solved again)."""
+not solved again). A recording of several people gives one file per person, OUT's name with
+`_subjectN` before its suffix (N the subject id mocapd gave them), or the one person asked for."""
 
 from __future__ import annotations
 
@@ -41,21 +42,29 @@ def is_recording(path: Path) -> bool:
         return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
-def _from_recording(path: Path, fmt: str, folder: Path) -> Path:
-    """The recording's published poses as the file `fmt` is exported from (a BVH or a joint CSV) in folder."""
+def _from_recording(path: Path, fmt: str, folder: Path) -> dict[int, Path]:
+    """Per subject (0 alone), the recording's published poses as the file `fmt` is exported from
+    (a BVH or a joint CSV), written in folder."""
     take = published.read(path)
-    if fmt in MOTION_FORMATS:
-        if take.skeleton is None:
-            raise InputError(f"{path}: no skeleton (no session attached, no calibration recorded): {fmt} needs one")
-        write_bvh(folder / "take.bvh", take.skeleton, take.thetas(), take.rate_hz())
-        return folder / "take.bvh"
-    write_positions_csv(folder / "joints.csv", [j.name for j in take.poses[0].joints], take.positions(), take.times())
-    return folder / "joints.csv"
+    sources = {}
+    for subject in take.subjects():
+        person = take.of(subject)
+        name = folder / f"subject{subject}"
+        if fmt in MOTION_FORMATS:
+            if person.skeleton is None:
+                raise InputError(f"{path}: no skeleton (no session attached, no calibration recorded): {fmt} needs one")
+            write_bvh(name.with_suffix(".bvh"), person.skeleton, person.thetas(), person.rate_hz())
+            sources[subject] = name.with_suffix(".bvh")
+        else:
+            names = [j.name for j in person.poses[0].joints]
+            write_positions_csv(name.with_suffix(".csv"), names, person.positions(), person.times())
+            sources[subject] = name.with_suffix(".csv")
+    return sources
 
 
-def source_file(solved: Path, fmt: str, folder: Path) -> Path:
-    """The BVH (motion formats) or joint CSV (the others) to export from; written into folder
-    from a recording."""
+def source_files(solved: Path, fmt: str, folder: Path) -> dict[int, Path]:
+    """Per subject (0 alone), the BVH (motion formats) or joint CSV (the others) to export from;
+    written into folder from a recording."""
     if solved.is_dir():
         solved = solved / ("take.bvh" if fmt in MOTION_FORMATS else "joints.csv")
     if not solved.is_file():
@@ -64,18 +73,33 @@ def source_file(solved: Path, fmt: str, folder: Path) -> Path:
         return _from_recording(solved, fmt, folder)
     if (solved.suffix.lower() == ".bvh") != (fmt in MOTION_FORMATS):
         raise InputError(f"{solved}: {fmt} is exported from a " + ("BVH" if fmt in MOTION_FORMATS else "joint CSV"))
-    return solved
+    return {0: solved}
 
 
-def export(solved: Path, fmt: str, out: Path, bvh_units: str = "cm") -> dict:
-    """Writes `out` in format `fmt` from a solve; what it holds and its convention."""
+def subject_file(out: Path, subject: int) -> Path:
+    """Where one person of several is written: OUT's name with _subjectN before its suffix."""
+    return out.with_name(f"{out.stem}_subject{subject}{out.suffix}")
+
+
+def export(solved: Path, fmt: str, out: Path, bvh_units: str = "cm", subject: int | None = None) -> dict:
+    """Writes `out` in format `fmt` from a solve (of several people: a file per person, or
+    `subject`'s alone); what it holds and its convention."""
     with tempfile.TemporaryDirectory() as folder:
-        source = source_file(Path(solved), fmt, Path(folder))
-        try:
-            summary = _write(fmt, source, out, bvh_units)
-        except OSError as e:
-            raise InputError(f"{out}: cannot write it: {e}") from None
-    return {**summary, "convention": FORMATS[fmt]}
+        sources = source_files(Path(solved), fmt, Path(folder))
+        if subject is not None:
+            if subject not in sources:
+                raise InputError(f"{solved}: no subject {subject} (subjects: {', '.join(map(str, sources))})")
+            sources = {subject: sources[subject]}
+        targets = {s: out if len(sources) == 1 else subject_file(out, s) for s in sources}
+        written = {}
+        for s, source in sources.items():
+            try:
+                written[s] = _write(fmt, source, targets[s], bvh_units)
+            except OSError as e:
+                raise InputError(f"{targets[s]}: cannot write it: {e}") from None
+    if len(written) == 1:
+        return {**next(iter(written.values())), "convention": FORMATS[fmt]}
+    return {"subjects": {str(s): {"out": str(targets[s]), **w} for s, w in written.items()}, "convention": FORMATS[fmt]}
 
 
 def _write(fmt: str, source: Path, out: Path, bvh_units: str) -> dict:
