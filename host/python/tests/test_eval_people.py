@@ -112,3 +112,33 @@ def test_the_live_hosts_pipeline_tracks_a_scene_as_the_tracker_does(shared, tmp_
             assert a["frames_with_another_suit"] == 0
         assert health.people.tracked == 3 and health.people.born == 3
         assert health.people.suits_worn == (3 if suits else 0)
+
+
+def test_a_recorded_take_of_several_people_solves_to_a_file_per_person(shared, tmp_path):
+    """A recording of three performers in their suits (its session attached, the suits' files
+    with it) solved by `mocap solve --recording`: a BVH and CSV per person, each person's CSV the
+    joints of one performer throughout."""
+    from mocap.io.joints_csv import read_positions_csv
+    from mocap.recording import recorder
+    from mocap.sim import messages
+    from mocap.sim import people as sim_people
+
+    scene = sim_people.simulate([shared / "data/mocap" / c for c in CLIPS], 3, 3.0, Config(), np.random.default_rng(0))
+    session = people.write_session(scene, tmp_path / "session", True, ["scene"], "scene")
+    with recorder.Recorder(tmp_path / "take.mcap") as r:
+        r.attach_session(session)
+        for arrival, type_name, payload in messages.scene_messages(scene, True):
+            r.write([type_name.encode(), payload], arrival)
+    assert cli.main(["solve", "--recording", str(tmp_path / "take.mcap"), "--out", str(tmp_path / "take.bvh"),
+                     "--csv", str(tmp_path / "joints.csv")]) == 0
+    assert not (tmp_path / "take.bvh").exists()
+    performers = []
+    for subject in (1, 2, 3):
+        assert (tmp_path / f"take_subject{subject}.bvh").is_file()
+        names, positions, _ = read_positions_csv(tmp_path / f"joints_subject{subject}.csv")
+        root = positions[:, names.index("pelvis"), :2]  # the performer whose root it follows, frame by frame
+        truth = np.array([t.thetas[-len(root):, :2] for t in scene.performers])
+        nearest = np.argmin(np.linalg.norm(truth - root, axis=2), axis=0)
+        assert len(root) > 150 and np.all(nearest == nearest[0]), subject
+        performers.append(int(nearest[0]))
+    assert sorted(performers) == [0, 1, 2]

@@ -9,7 +9,8 @@ import tempfile
 from pathlib import Path
 
 from mocap.errors import InputError
-from mocap.recording import offline, reader
+from mocap.io.session import Session
+from mocap.recording import offline, published, reader
 from mocap.takes import solve as take_solve
 
 
@@ -19,7 +20,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     so.add_argument("--recording", default=None, help="MCAP file of `mocap record` / `mocap demo --record`")
     so.add_argument("--take", default=None, help="take folder (docs/take_format.md)")
     so.add_argument("--session", default=None, help="session file (default: the one attached to the recording)")
-    so.add_argument("--out", required=True, help="BVH to write (--recording) or output folder (--take)")
+    so.add_argument("--out", required=True, help="BVH to write (--recording; of several people, one per person: "
+                    "_subjectID before the suffix, as --csv's) or output folder (--take)")
     so.add_argument("--csv", default=None, help="also write joint positions as CSV")
     so.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                     help="--take: a solver option of the solve after the calibration, e.g. motion.enabled=false "
@@ -46,6 +48,7 @@ def run(args: argparse.Namespace) -> int:
         if session is None:
             raise InputError(f"{args.recording}: no session is attached to this recording; give --session")
         poses, dropped, skeleton = offline.solve_recording(recording, session)
+        suits = published.suit_skeletons(Session.load(session), skeleton)
     integrity = recording.integrity
     clock = (f"; {dropped['clock_offset']} inputs' times are not on their arrival's clock (recorded from a replay "
              "without --restamp?)") if dropped.get("clock_offset") else ""
@@ -54,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
                          f"{integrity.describe()}){clock}")
     if clock:
         print(f"mocap solve: warning: {args.recording}{clock}", file=sys.stderr)
-    offline.write_poses(poses, skeleton, Path(args.out), Path(args.csv) if args.csv else None)
-    print(json.dumps({"frames": len(poses), "out": args.out, "dropped": dropped, "integrity": integrity.as_dict()}),
-          flush=True)
+    written = offline.write_poses(poses, skeleton, Path(args.out), Path(args.csv) if args.csv else None, suits)
+    print(json.dumps({"frames": len(poses), "out": args.out, "files": [str(f) for f in written], "dropped": dropped,
+                      "integrity": integrity.as_dict()}), flush=True)
     return 0

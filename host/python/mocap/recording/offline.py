@@ -17,7 +17,7 @@ from mocap.errors import InputError
 from mocap.io.bvh_export import write_bvh
 from mocap.io.joints_csv import write_positions_csv
 from mocap.net import wire
-from mocap.recording import reader
+from mocap.recording import published, reader
 
 INPUT_TOPICS = ("/camera/", "/imu/", "/calibration/")
 
@@ -75,13 +75,27 @@ def frame_rate(poses: list) -> float:
     return float(1e9 / np.median(np.diff([p.capture_time_ns for p in poses])))
 
 
-def write_poses(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None = None) -> None:
+def write_poses(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None = None, suits: list = ()) -> list:
     """The solved poses as a BVH of `skeleton` (the latest calibration's) and, if csv, the joint
-    positions as solved, each frame with the calibration in use then (mocap.io.joints_csv)."""
-    if any(p.subject_id for p in poses):
-        raise InputError("the poses are of several people (a session with \"people\" above 1): a BVH holds "
-                         "one; writing one file per person is not built yet")
+    positions as solved, each frame with the calibration in use then (mocap.io.joints_csv).
+    Poses of several people: a BVH (and CSV) per person, the name with _subjectN before its
+    suffix, each of the skeleton of the suit they wore last (suits: published.suit_skeletons)
+    else `skeleton`. The files written."""
+    subjects = sorted({p.subject_id for p in poses})
+    if subjects == [0]:
+        return _write_person(poses, skeleton, bvh, csv)
+    written = []
+    for subject in subjects:
+        person = [p for p in poses if p.subject_id == subject]
+        written += _write_person(person, published.worn_skeleton(person, suits, skeleton),
+                                 published.subject_file(bvh, subject), csv and published.subject_file(csv, subject))
+    return written
+
+
+def _write_person(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None) -> list:
     write_bvh(bvh, skeleton, np.array([list(p.theta) for p in poses]), frame_rate(poses))
-    if csv is not None:
-        times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
-        write_positions_csv(csv, skeleton.bone_names, joint_positions(poses), times)
+    if csv is None:
+        return [bvh]
+    times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
+    write_positions_csv(csv, skeleton.bone_names, joint_positions(poses), times)
+    return [bvh, csv]

@@ -41,12 +41,7 @@ class Published:
         poses = [p for p in self.poses if p.subject_id == subject]
         if not poses:
             raise InputError(f"no subject {subject} in this take (subjects: {', '.join(map(str, self.subjects()))})")
-        skeleton = self.skeleton
-        worn = next((set(p.imus) for p in reversed(poses) if p.imus), set())
-        for names, suit_skeleton in self.suits:
-            if worn and worn <= names:
-                skeleton = suit_skeleton
-        return Published(poses, skeleton, self.integrity)
+        return Published(poses, worn_skeleton(poses, self.suits, self.skeleton), self.integrity)
 
     def positions(self) -> np.ndarray:
         """(F, J, 3) m: the joints as published, each frame with the calibration it was solved with."""
@@ -64,6 +59,28 @@ class Published:
         if len(self.poses) < 2:
             return 60.0
         return float(1e9 / np.median(np.diff([p.capture_time_ns for p in self.poses])))
+
+
+def suit_skeletons(session: Session, default: _core.Skeleton | None) -> list:
+    """A session's suits as (their sensors' names, the skeleton they were calibrated on: the
+    suit's, else `default`); none for a session of one person."""
+    suits = []
+    for suit in session.suits:
+        skeleton = _core.Skeleton.load(str(session.base / suit["skeleton"])) if "skeleton" in suit else default
+        suits.append(({site.name for site in _core.load_imu_sites(str(session.base / suit["imus"]), skeleton)}, skeleton))
+    return suits
+
+
+def worn_skeleton(poses: list, suits: list, default: _core.Skeleton | None) -> _core.Skeleton | None:
+    """One person's skeleton: that of the suit (suit_skeletons) whose sensors their last
+    PoseFrame with sensors lists, else `default`."""
+    worn = next((set(p.imus) for p in reversed(poses) if p.imus), set())
+    return next((skeleton for names, skeleton in suits if worn and worn <= names), default)
+
+
+def subject_file(path: Path, subject: int) -> Path:
+    """Where one person of several is written: the file's name with _subjectN before its suffix."""
+    return path.with_name(f"{path.stem}_subject{subject}{path.suffix}")
 
 
 def _decoded(message: reader.RecordedMessage):
@@ -106,11 +123,6 @@ def _skeletons(recording: reader.Recording, calibrated: tuple[int, str] | None) 
             session = None if found is None else Session.load(found)
             skeleton = _core.Skeleton.from_json(calibrated[1]) if calibrated is not None else (
                 None if session is None else _core.Skeleton.load(str(session.file("skeleton"))))
-            suits = []
-            for suit in session.suits if session is not None else []:
-                worn = _core.Skeleton.load(str(session.base / suit["skeleton"])) if "skeleton" in suit else skeleton
-                names = {site.name for site in _core.load_imu_sites(str(session.base / suit["imus"]), worn)}
-                suits.append((names, worn))
-            return skeleton, suits
+            return skeleton, [] if session is None else suit_skeletons(session, skeleton)
     except ValueError as e:
         raise InputError(f"{recording.path}: its skeleton cannot be read ({e})") from None

@@ -76,11 +76,6 @@ def source_files(solved: Path, fmt: str, folder: Path) -> dict[int, Path]:
     return {0: solved}
 
 
-def subject_file(out: Path, subject: int) -> Path:
-    """Where one person of several is written: OUT's name with _subjectN before its suffix."""
-    return out.with_name(f"{out.stem}_subject{subject}{out.suffix}")
-
-
 def export(solved: Path, fmt: str, out: Path, bvh_units: str = "cm", subject: int | None = None) -> dict:
     """Writes `out` in format `fmt` from a solve (of several people: a file per person, or
     `subject`'s alone); what it holds and its convention."""
@@ -90,7 +85,7 @@ def export(solved: Path, fmt: str, out: Path, bvh_units: str = "cm", subject: in
             if subject not in sources:
                 raise InputError(f"{solved}: no subject {subject} (subjects: {', '.join(map(str, sources))})")
             sources = {subject: sources[subject]}
-        targets = {s: out if len(sources) == 1 else subject_file(out, s) for s in sources}
+        targets = {s: out if len(sources) == 1 else published.subject_file(out, s) for s in sources}
         written = {}
         for s, source in sources.items():
             try:
