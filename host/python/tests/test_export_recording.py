@@ -130,3 +130,50 @@ def test_poses_of_several_people_are_written_a_file_per_person(tmp_path):
         mine = [p for p in poses if p.subject_id == subject]
         assert np.abs(positions - np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in mine])).max() < 1e-6
         assert bvh.load(tmp_path / f"take_subject{subject}.bvh").num_frames == FRAMES // 2
+
+
+def test_a_recording_of_several_people_exports_a_file_per_person(tmp_path):
+    """Two people on the same frames (subject 1 in a suit whose skeleton is 10% longer, subject 2
+    from video, from the fourth frame): a BVH each with its own skeleton, or one person's CSV."""
+    session = Session.load(_session(tmp_path))
+    longer = json.loads(paths.DEFAULT_SKELETON.read_text())
+    for bone in longer["bones"]:
+        bone["offset"] = [1.1 * v for v in bone["offset"]]
+    (tmp_path / "suit_skeleton.json").write_text(json.dumps(longer))
+    session = dataclasses.replace(session, people=2, suits=[{"imus": "imus.json", "skeleton": "suit_skeleton.json"}])
+    session.save(tmp_path / "session.json")
+    suit_skeleton = _core.Skeleton.from_json(json.dumps(longer))
+    sensors = [s.name for s in _core.load_imu_sites(str(tmp_path / "imus.json"), suit_skeleton)]
+    _, suited = _poses(suit_skeleton)
+    _, unsuited = _poses(_core.Skeleton.load(str(paths.DEFAULT_SKELETON)))
+    for pose in suited:
+        pose.subject_id = 1
+        pose.imus.extend(sensors)
+    for pose in unsuited:
+        pose.subject_id = 2
+    path = tmp_path / "take.mcap"
+    with recorder.Recorder(path) as r:
+        r.attach_session(tmp_path / "session.json")
+        for k in range(FRAMES):
+            for pose in [suited[k]] + ([unsuited[k]] if k >= 3 else []):
+                r.write(wire.encode(pose), pose.capture_time_ns + 2_000_000)
+    (tmp_path / "suit_skeleton.json").unlink()  # the recording holds what it needs
+
+    out = _export(path, "--format", "bvh", "--out", tmp_path / "take.bvh")
+    assert out.returncode == 0, out.stderr
+    subjects = json.loads(out.stdout)["subjects"]
+    assert {s: v["frames"] for s, v in subjects.items()} == {"1": FRAMES, "2": FRAMES - 3}, out.stdout
+    for file, skeleton, poses in (("take_subject1.bvh", suit_skeleton, suited),
+                                  ("take_subject2.bvh", None, unsuited[3:])):
+        motion = bvh.load(tmp_path / file)
+        _, global_cm = motion.global_transforms()
+        published = np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in poses])
+        names = [j.name for j in poses[0].joints]
+        assert np.abs(global_cm[:, [motion.index(n) for n in names]] / 100.0 @ retarget.P.T - published).max() < 1e-4
+
+    out = _export(path, "--format", "csv", "--subject", "2", "--out", tmp_path / "two.csv")
+    assert out.returncode == 0, out.stderr
+    _, positions, _ = read_positions_csv(tmp_path / "two.csv")
+    assert positions.shape[0] == FRAMES - 3 and not (tmp_path / "two_subject1.csv").exists()
+    out = _export(path, "--format", "csv", "--subject", "5", "--out", tmp_path / "five.csv")
+    assert out.returncode == 2 and "no subject 5 (subjects: 1, 2)" in out.stderr, out.stderr
