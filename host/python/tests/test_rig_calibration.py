@@ -130,3 +130,83 @@ def test_bad_input_is_named(simulated, case, message):
 def test_the_command_ends_with_the_reason(tmp_path, capsys):
     assert main(["calibrate-rig", "--take", str(tmp_path), "--height", "1.7", "--out", str(tmp_path / "c.toml")]) == 2
     assert "take.toml" in capsys.readouterr().err
+
+
+def _recorded(take, folder, session: bool = True):
+    """The take's camera frames (and IMU batches) as a recording of the boxes' streams."""
+    from mocap.recording import recorder
+    from mocap.takes import messages
+
+    path = folder / "boxes.mcap"
+    with recorder.Recorder(path) as r:
+        if session:
+            r.attach_session(messages.write_session(take, folder / "session"))
+        for arrival, type_name, payload in messages.messages(take):
+            r.write([type_name.encode(), payload], arrival)
+    return path
+
+
+def test_a_recording_of_the_boxes_calibrates_as_its_take_does(simulated, tmp_path, capsys):
+    """The boxes' KeypointFrames recorded (the intrinsics from the attached session) give the rig
+    the take folder gives: the same detections (to the wire's float precision), on the same
+    frames by capture time."""
+    take, folder = simulated
+    path = _recorded(take, tmp_path)
+    assert main(["calibrate-rig", "--recording", str(path), "--height", "1.7", "--out", str(tmp_path / "r.toml"),
+                 "--compare"]) == 0
+    line = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert line["frames"] == take.n_frames and line["position_cm_max"] < 1.5, line
+    assert main(["calibrate-rig", "--take", str(folder), "--height", "1.7", "--out", str(tmp_path / "t.toml")]) == 0
+    from_recording, from_take = calib_toml.load(tmp_path / "r.toml"), calib_toml.load(tmp_path / "t.toml")
+    by_name = {c.name: c for c in from_take.cameras}
+    for cam in from_recording.cameras:
+        assert np.allclose(cam.translation, by_name[cam.name].translation, atol=1e-3), cam.name  # 1 mm
+        assert np.allclose(cam.rotation, by_name[cam.name].rotation, atol=1e-4), cam.name
+
+
+def test_without_intrinsics_a_field_of_view_stands_in(simulated, tmp_path, capsys):
+    take, _ = simulated
+    path = _recorded(take, tmp_path, session=False)
+    out = ["--height", "1.7", "--out", str(tmp_path / "fov.toml")]
+    assert main(["calibrate-rig", "--recording", str(path), *out]) == 2
+    assert "no intrinsics: give --intrinsics Calib.toml or --fov DEG" in capsys.readouterr().err
+    cam = take.rig.cameras[0]
+    fov = float(np.degrees(2 * np.arctan(cam.width / 2 / cam.fx)))  # the simulated cameras': pinholes
+    assert main(["calibrate-rig", "--recording", str(path), *out, "--fov", f"{fov:.4f}"]) == 0
+    rig = calib_toml.load(tmp_path / "fov.toml")
+    assert abs(rig.cameras[0].fx - cam.fx) < 0.01 * cam.fx and rig.cameras[0].cx == cam.width / 2
+    _, cm, deg, _ = aligned_errors(rig, take.rig)
+    assert cm.max() < 2.0 and deg.max() < 0.5, (cm, deg)
+    assert main(["calibrate-rig", "--recording", str(path), *out, "--fov", "200"]) == 2
+    assert "give 10-170" in capsys.readouterr().err
+
+
+def test_live_from_the_boxes_streams_the_rig_is_estimated_and_refined(simulated, tmp_path):
+    """The boxes' streams (the take's recording replayed at twice real time) received live, the
+    intrinsics from the session: an estimate written every few seconds from what came so far,
+    the last from all of it, near the truth; what came is kept as a recording."""
+    import threading
+
+    from mocap.calibration.rig import live, recorded
+    from mocap.demo.studio import free_ports
+    from mocap.recording import replay
+
+    take, _ = simulated
+    path = _recorded(take, tmp_path)
+    endpoint = f"tcp://127.0.0.1:{free_ports(1)[0]}"
+    lines = []
+    worker = threading.Thread(target=lambda: live.run(
+        [endpoint], tmp_path / "live.mcap", tmp_path / "live.toml", 1.7,
+        lambda d: recorded.intrinsics(d, None, None), 7.0, 3.0, lines.append, tmp_path / "session" / "session.json"))
+    worker.start()
+    try:
+        replay.replay(path, endpoint, speed=2.0, restamp=True)
+    finally:
+        worker.join(timeout=120)
+    assert not worker.is_alive()
+    estimates = [line for line in lines if "out" in line]
+    assert len(estimates) >= 2 and estimates[-1]["final"] and "moved_cm_max" in estimates[-1], lines
+    assert estimates[0]["frames"] < estimates[-1]["frames"] >= 0.9 * take.n_frames, lines
+    _, cm, deg, _ = aligned_errors(calib_toml.load(tmp_path / "live.toml"), take.rig)
+    assert cm.max() < 1.5 and deg.max() < 0.4, (cm, deg)
+    assert recorded.read(tmp_path / "live.mcap").cameras == sorted(c.name for c in take.rig.cameras)
