@@ -210,3 +210,20 @@ def test_live_from_the_boxes_streams_the_rig_is_estimated_and_refined(simulated,
     _, cm, deg, _ = aligned_errors(calib_toml.load(tmp_path / "live.toml"), take.rig)
     assert cm.max() < 1.5 and deg.max() < 0.4, (cm, deg)
     assert recorded.read(tmp_path / "live.mcap").cameras == sorted(c.name for c in take.rig.cameras)
+
+
+def test_a_recording_without_detections_or_of_mixed_layouts_is_named(tmp_path):
+    from mocap.calibration.rig import recorded
+    from mocap.net import wire
+    from mocap.recording import recorder
+
+    with recorder.Recorder(tmp_path / "none.mcap") as r:
+        r.write(wire.encode(wire.KeypointFrame(camera_id="cam1", capture_time_ns=1, detected=False)), 1)
+    with pytest.raises(InputError, match="no camera frames with detections"):
+        recorded.read(tmp_path / "none.mcap")
+    with recorder.Recorder(tmp_path / "mixed.mcap") as r:
+        for k, layout in enumerate(("coco17", "body25b")):
+            r.write(wire.encode(wire.KeypointFrame(camera_id=f"cam{k}", capture_time_ns=1, detected=True,
+                                                   keypoint_layout=layout)), 1)
+    with pytest.raises(InputError, match="several keypoint layouts"):
+        recorded.read(tmp_path / "mixed.mcap")
