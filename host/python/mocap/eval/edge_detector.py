@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 import onnxruntime as ort
 
-from mocap_edge import resources
+from mocap.io import demo_data
+from mocap_edge import camera_box, resources
 from mocap_edge.detect.base import Detector, Person
 from mocap_edge.detect.blazepose import BlazePose
 from mocap_edge.detect.openpose_json import box_size, largest_people
@@ -115,7 +116,26 @@ def bench(trial: Path) -> dict:
     _, hs = run(model, videos, detect_every=(8, 2), cameras_per_step=4)
     return {"bench": "edge", **per_process[1], "cameras_per_process": per_process,
             "hs_fps_per_camera": hs["fps_per_camera"], "hs_inferred_fps_per_camera": hs["inferred_fps_per_camera"],
+            "two_people": several_people(model, demo_data.fetch_multiperson()),
             "model": "BlazePose full (MediaPipe 0.10.14) on onnxruntime, 2 threads"}
+
+
+def several_people(model: Detector, trial: Path) -> dict:
+    """The camera box's tracker as the box runs it (up to camera_box.MAX_PEOPLE people, the
+    person detector looking for newcomers every camera_box.REDETECT_EVERY frames) on each video
+    of Pose2Sim's multi-person trial (two people): frames per second per camera and the people
+    found per frame, per camera and overall."""
+    videos = load_trial(trial)
+    people, elapsed = {}, 0.0
+    for c, frames in videos.items():
+        tracker = Tracker(model, max_people=camera_box.MAX_PEOPLE, redetect_every=camera_box.REDETECT_EVERY)
+        start = time.perf_counter()
+        people[c] = [len(tracker.step({c: image})[c]) for image in frames]
+        elapsed += time.perf_counter() - start
+    return {"fps_per_camera": sum(len(v) for v in videos.values()) / elapsed,
+            "people_per_frame": float(np.mean([n for v in people.values() for n in v])),
+            "people_per_frame_by_camera": {f"cam{c:02d}": round(float(np.mean(v)), 2) for c, v in people.items()},
+            "people_in_view": 2}
 
 
 def perturbed(model: BlazePose, seed: int = 0, relative: float = 0.0, grey_levels: int = 0,
