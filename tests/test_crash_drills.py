@@ -26,13 +26,13 @@ def test_a_killed_camera_box_and_imu_hub_leave_the_solve_going_and_rejoin(studio
         assert d[part]["waited_after_kill_s"] < 0.012, d
         assert d[part]["rejoin_s"] <= 1.0, d  # from the restart to a pose with the stream
         assert d[part]["reported_inactive_after_s"] <= 1.5, d  # Health's period is 1 s
-    # Health counts the frames the camera's gap lacks (the box numbers them by the take), as
-    # many as the recording lacks, give or take what mocapd and the recorder each received
-    # before they reconnected. (A restarted hub numbers its samples afresh: a restart for
-    # Health, not a loss; the gap shows as the IMUs inactive.) Measured for the recording's
-    # 0.82-s gap (49 frames): 54-56 on a quiet machine, 37 once in CI's full run (not explained:
-    # see docs/reliability.md, crash drills); nothing counted would be a fault.
-    assert d["camera"]["health_lost"] >= 0.6 * 60 * d["recording"][drill.CAMERA]["gap_s"], d
+    # Health counts the frames mocapd went without (the box numbers them by the take): the run
+    # of poses without the camera, less the few it received while coming back but did not use.
+    # (Not the recording's gap: the recorder reconnects to the box at its own time.) Measured:
+    # equal in four runs, 38-65 frames. A restarted hub numbers its samples afresh: a restart
+    # for Health, not a loss; the gap shows as the IMUs inactive.
+    without = d["camera"]["frames_without_it"]
+    assert without > 0 and without - max(5, 0.15 * without) <= d["camera"]["health_lost"] <= without, d
     kept = d["recording"]
     assert all(n == 0 for n in kept["lost"].values()), kept
     assert kept[drill.CAMERA]["in_flight_at_kill"] <= 2, kept

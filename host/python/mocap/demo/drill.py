@@ -94,6 +94,16 @@ def _continuity(live: LiveStudio, around_ns: int) -> dict:
             "waited_after_kill_s": float(np.median((after[:, 1] - after[:, 0]) * 1e-9) - usual)}
 
 
+def _unused(live: LiveStudio, camera: str, around_ns: int) -> int:
+    """The frames around a kill (the longest run within 3 s after it) whose poses the camera
+    is not in: what the solve went without, whether the box never sent them or mocapd never
+    received them."""
+    times = sorted(a.message.capture_time_ns for a in live.poses()
+                   if camera in a.message.cameras and -0.5e9 <= a.message.capture_time_ns - around_ns <= 3e9)
+    gaps = np.diff(np.array(times, np.int64)) * 1e-9 / PERIOD_S if len(times) > 1 else np.zeros(1)
+    return int(max(np.round(gaps.max()) - 1, 0))
+
+
 def edge(s: Studio, folder: Path) -> dict:
     """The edge drill: CAMERA's box killed 2 s into the take and started again, then the hub."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -105,7 +115,8 @@ def edge(s: Studio, folder: Path) -> dict:
     kept = recording_check.check(folder / "take.mcap", s, live.start_ns, {CAMERA: camera, "hub0": hub})
     last = {x.stream: x for x in live.healths()[-1].message.streams}  # the gaps as Health counts them
     return {"drill": "edge", "camera": {**camera, **_continuity(live, camera["killed_ns"]),
-                                        "health_lost": last[f"camera/{CAMERA}"].lost},
+                                        "health_lost": last[f"camera/{CAMERA}"].lost,
+                                        "frames_without_it": _unused(live, CAMERA, camera["killed_ns"])},
             "hub": {**hub, **_continuity(live, hub["killed_ns"]), "health_lost": last[f"imu/{SENSOR}"].lost},
             "recording": kept}
 
