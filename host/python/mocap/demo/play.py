@@ -133,6 +133,31 @@ def collect(host: subprocess.Popen, sub: zmq.Socket, progress: Callable | None,
     return poses, healths
 
 
+def mocapd_command(session: Path, duration_s: float, realtime: bool) -> list[str]:
+    """mocapd on `session` for duration_s, quiet; SCHED_FIFO at REALTIME_PRIORITY if realtime."""
+    priority = ["--realtime", str(REALTIME_PRIORITY)] if realtime else []
+    return [str(MOCAPD), str(session), "--duration", f"{duration_s:.3f}", "--quiet", *priority]
+
+
+def published(host: subprocess.Popen, sub: zmq.Socket, others: list, progress: Callable | None = None,
+              on_pose: Callable | None = None) -> tuple[list, list, dict]:
+    """The poses and Health mocapd (`host`, started with its stdout piped) published on `sub`
+    until it exits, and its summary line; InputError when it failed or gave no summary. The
+    processes feeding it (`others`) and mocapd itself are stopped, and `sub` closed, after."""
+    try:
+        poses, healths = collect(host, sub, progress, on_pose)
+        lines = host.stdout.read().strip().splitlines()
+        if host.wait() != 0 or not lines:
+            raise InputError(f"mocapd stopped with status {host.returncode} (its log is above)")
+        return poses, healths, json.loads(lines[-1])
+    finally:
+        for p in [*others, host]:
+            if p.poll() is None:
+                p.terminate()
+            p.wait(timeout=10)
+        sub.close()
+
+
 def play(studio: Studio, progress: Callable | None = None, faults: dict | None = None, on_pose: Callable | None = None,
          record: Path | None = None, realtime: bool = True, lead_s: float = LEAD_S) -> Run:
     """Plays the studio live: mocapd + one process per camera + the IMU hub, all on
@@ -145,9 +170,8 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     faults = faults or {}
     duration = float(studio.frame_times[-1])
     start_ns = time.time_ns() + int(lead_s * 1e9)
-    priority = ["--realtime", str(REALTIME_PRIORITY)] if realtime else []
-    host = subprocess.Popen([str(MOCAPD), str(studio.session), "--duration", f"{lead_s + duration + 1.5:.3f}",
-                             "--quiet", *priority], stdout=subprocess.PIPE, text=True)
+    host = subprocess.Popen(mocapd_command(studio.session, lead_s + duration + 1.5, realtime), stdout=subprocess.PIPE,
+                            text=True)
     commands = [camera_box_command(studio, c, start_ns, faults.get("camera")) for c in range(len(studio.camera_ids))]
     if studio.calibrator:
         commands.append(_calibrator_command(studio, duration, lead_s))
@@ -157,18 +181,9 @@ def play(studio: Studio, progress: Callable | None = None, faults: dict | None =
     keys = Session.load(studio.session).client_keys()  # None: a studio without keys (the default)
     sub = transport.subscriber(zmq.Context.instance(), [studio.endpoints["host"]], keys=keys)
     try:
-        poses, healths = collect(host, sub, progress, on_pose)
-        lines = host.stdout.read().strip().splitlines()
-        if host.wait() != 0 or not lines:
-            raise InputError(f"mocapd stopped with status {host.returncode} (its log is above)")
-        summary = json.loads(lines[-1])
+        poses, healths, summary = published(host, sub, edge, progress, on_pose)
     finally:
-        for p in [*edge, host]:
-            if p.poll() is None:
-                p.terminate()
-            p.wait(timeout=10)
         if recording is not None:  # it closes its file on SIGINT, as at Ctrl-C
             recording.send_signal(signal.SIGINT)
             recording.wait(timeout=10)
-        sub.close()
     return Run(poses, healths, summary, start_ns)

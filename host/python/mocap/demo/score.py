@@ -76,15 +76,17 @@ def _accuracy(studio: Studio, run: Run, matched: list[int], poses: list) -> dict
     return out
 
 
-def bench(seconds: float = 60.0, realtime: bool = True, cameras: int = 8) -> dict:
+def bench(seconds: float = 60.0, realtime: bool = True, cameras: int = 8, calibration: str | None = None) -> dict:
     """The live benchmark: `cameras` x 60 fps (33 keypoints) + 13 IMUs x 100 Hz over loopback
     for `seconds`; host latency and frames that never came back. realtime: mocapd asks for
-    real-time scheduling (play.REALTIME_PRIORITY). Beyond 8 cameras the session has the truth's
-    calibration (estimating one first would replay every camera's take through the boxes'
-    pieces; the host's work per frame is the same), and the boxes get longer to start: one
+    real-time scheduling (play.REALTIME_PRIORITY). calibration: the session's (studio.prepare's
+    choices); by default "estimated" up to 8 cameras and the truth's ("oracle") beyond
+    (estimating one first would replay every camera's take through the boxes' pieces; the
+    host's work per frame is the same). Beyond 8 cameras the boxes get longer to start: one
     process each, each an interpreter importing numpy and ZeroMQ."""
     with tempfile.TemporaryDirectory() as folder:
-        studio = prepare(Path(folder), seconds, cameras=cameras, calibration="estimated" if cameras <= 8 else "oracle")
+        calibration = calibration or ("estimated" if cameras <= 8 else "oracle")
+        studio = prepare(Path(folder), seconds, cameras=cameras, calibration=calibration)
         run = play(studio, realtime=realtime, lead_s=max(LEAD_S, BOX_START_S * cameras))
         result = score(studio, run)
     return {"bench": "live", "seconds": seconds, "cameras": len(studio.camera_ids), "imus": 13,

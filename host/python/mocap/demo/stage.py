@@ -9,7 +9,6 @@ them to the host."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import subprocess
 import sys
 import tempfile
@@ -53,24 +52,14 @@ def replayed(session: Path, output: str, recording: Path, duration_s: float, rea
     published on `output` and its summary."""
     endpoint = f"tcp://127.0.0.1:{free_ports(1)[0]}"
     path = dataclasses.replace(Session.load(session), inputs=[endpoint]).save(session.parent / "session_replayed.json")
-    priority = ["--realtime", str(play.REALTIME_PRIORITY)] if realtime else []
-    host = subprocess.Popen([str(play.MOCAPD), str(path), "--duration", f"{duration_s:.3f}", "--quiet", *priority],
-                            stdout=subprocess.PIPE, text=True)
+    host = subprocess.Popen(play.mocapd_command(path, duration_s, realtime), stdout=subprocess.PIPE, text=True)
     sub = transport.subscriber(zmq.Context.instance(), [output], keys=None)
     replayer = subprocess.Popen([sys.executable, "-m", "mocap.cli", "replay", str(recording), "--bind", endpoint,
                                  "--restamp"], stdout=subprocess.DEVNULL)
-    try:
-        poses, healths = play.collect(host, sub, None, None)
-        lines = host.stdout.read().strip().splitlines()
-        if host.wait() != 0 or not lines or not poses:
-            raise InputError(f"mocapd stopped with status {host.returncode}, {len(poses)} poses (its log is above)")
-    finally:
-        for p in (replayer, host):
-            if p.poll() is None:
-                p.terminate()
-            p.wait(timeout=10)
-        sub.close()
-    return poses, healths, json.loads(lines[-1])
+    poses, healths, summary = play.published(host, sub, [replayer])
+    if not poses:
+        raise InputError("mocapd published no pose (its log is above)")
+    return poses, healths, summary
 
 
 def _run(studio: Studio, recording: Path, realtime: bool) -> play.Run:
