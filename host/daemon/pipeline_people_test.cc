@@ -9,6 +9,7 @@
 #include <random>
 
 #include "pipeline.h"
+#include "pipeline_test_messages.h"
 #include "synthetic_scene.h"
 
 namespace mocap {
@@ -32,30 +33,14 @@ struct Stage {
     }
   }
   std::unique_ptr<HostPipeline> Pipeline(int people_in_session) const {
-    Session s;
-    s.skeleton = scene.skeleton, s.rig = scene.rig, s.layout = scene.layout, s.imus = scene.imus;
-    s.people = people_in_session;
-    std::string error;
-    auto p = HostPipeline::Create(s, &error);
-    EXPECT_TRUE(p) << error;
-    return p;
+    return testing::ScenePipeline(scene, people_in_session);
   }
   // Camera c's frame k: both performers, walking along y, in an order that changes each frame.
   std::string Keypoints(int k, int c) const {
-    v1::KeypointFrame f;
-    f.set_camera_id(scene.rig.cameras[c].name);
-    f.set_frame_index(k);
-    f.set_capture_time_ns(kT0 + k * kFrame);
-    f.set_keypoint_layout(scene.layout.name);
-    f.set_detected(true);
-    for (int i = 0; i < 2; ++i) {
-      const int p = (i + k + c) % 2;
-      const FrameObservations obs = testing::Render(scene, At(p, k), 0);
-      v1::KeypointPerson* person = f.add_persons();
-      for (const Keypoint2D& kp : obs.cameras[c].keypoints)
-        person->add_x(kp.x), person->add_y(kp.y), person->add_confidence(kp.confidence);
-    }
-    return f.SerializeAsString();
+    std::vector<std::vector<Keypoint2D>> persons;
+    for (int i = 0; i < 2; ++i)
+      persons.push_back(testing::Render(scene, At((i + k + c) % 2, k), 0).cameras[c].keypoints);
+    return testing::CameraFrame(scene, c, k, kT0 + k * kFrame, persons);
   }
   Eigen::VectorXd At(int p, int k) const {
     Eigen::VectorXd theta = people[p];

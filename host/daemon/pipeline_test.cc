@@ -6,6 +6,7 @@
 
 #include <fstream>
 
+#include "pipeline_test_messages.h"
 #include "synthetic_scene.h"
 
 namespace mocap {
@@ -29,30 +30,13 @@ struct Studio {
   }
   std::unique_ptr<HostPipeline> Pipeline(const Scene* told = nullptr,
                                          bool imus_calibrated = true) const {
-    const Scene& m = told ? *told : scene;
-    Session s;
-    s.skeleton = m.skeleton, s.rig = m.rig, s.layout = m.layout, s.imus = m.imus;
-    s.imus_calibrated = imus_calibrated;
-    std::string error;
-    auto p = HostPipeline::Create(s, &error);
-    EXPECT_TRUE(p) << error;
-    return p;
+    return testing::ScenePipeline(told ? *told : scene, 1, imus_calibrated);
   }
   std::string Keypoints(int k, int c) const {
-    const FrameObservations obs = testing::Render(scene, poses[k], 0);
-    v1::KeypointFrame f;
-    f.set_camera_id(scene.rig.cameras[c].name);
-    f.set_frame_index(k);
-    f.set_capture_time_ns(kT0 + k * kFrame);
-    f.set_keypoint_layout(scene.layout.name);
-    f.set_detected(true);
-    auto* decoy = f.add_persons();  // a bystander, shifted by 300 px
-    auto* p = f.add_persons();
-    for (const Keypoint2D& kp : obs.cameras[c].keypoints) {
-      p->add_x(kp.x), p->add_y(kp.y), p->add_confidence(kp.confidence);
-      decoy->add_x(kp.x + 300), decoy->add_y(kp.y), decoy->add_confidence(0.5);
-    }
-    return f.SerializeAsString();
+    const std::vector<Keypoint2D> person = testing::Render(scene, poses[k], 0).cameras[c].keypoints;
+    std::vector<Keypoint2D> decoy = person;  // a bystander, shifted by 300 px
+    for (Keypoint2D& kp : decoy) kp.x += 300, kp.confidence = 0.5;
+    return testing::CameraFrame(scene, c, k, kT0 + k * kFrame, {decoy, person});
   }
   std::string Imus(int k, const std::string& skip = "") const {
     const FrameObservations obs = testing::Render(scene, poses[k], 0);
