@@ -80,22 +80,26 @@ def write_poses(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | No
     positions as solved, each frame with the calibration in use then (mocap.io.joints_csv).
     Poses of several people: a BVH (and CSV) per person, the name with _subjectN before its
     suffix, each of the skeleton of the suit they wore last (suits: published.suit_skeletons)
-    else `skeleton`. The files written."""
+    else `skeleton`, the CSVs' times all from the take's first pose. The files written."""
     subjects = sorted({p.subject_id for p in poses})
     if subjects == [0]:
         return _write_person(poses, skeleton, bvh, csv)
-    written = []
+    written, start_ns = [], min(p.capture_time_ns for p in poses)
     for subject in subjects:
         person = [p for p in poses if p.subject_id == subject]
         written += _write_person(person, published.worn_skeleton(person, suits, skeleton),
-                                 published.subject_file(bvh, subject), csv and published.subject_file(csv, subject))
+                                 published.subject_file(bvh, subject), csv and published.subject_file(csv, subject),
+                                 start_ns)
     return written
 
 
-def _write_person(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None) -> list:
+def _write_person(poses: list, skeleton: _core.Skeleton, bvh: Path, csv: Path | None,
+                  start_ns: int | None = None) -> list:
+    """One person's BVH and CSV, the CSV's times from start_ns (default: their first pose)."""
     write_bvh(bvh, skeleton, np.array([list(p.theta) for p in poses]), frame_rate(poses))
     if csv is None:
         return [bvh]
-    times = np.array([p.capture_time_ns - poses[0].capture_time_ns for p in poses]) * 1e-9
+    start_ns = poses[0].capture_time_ns if start_ns is None else start_ns
+    times = np.array([p.capture_time_ns - start_ns for p in poses]) * 1e-9
     write_positions_csv(csv, skeleton.bone_names, joint_positions(poses), times)
     return [bvh, csv]

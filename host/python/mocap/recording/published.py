@@ -6,7 +6,7 @@ recorded take from them without solving it again.
 A take of several people (a session with "people" above 1) has one PoseFrame per person and
 frame, each with its subject id: `subjects()` lists them and `of(id)` is one person's take, with
 the skeleton of the suit they wore last (the suit whose sensors their PoseFrames list), else the
-session's."""
+session's, and its times from the take's first pose (everyone's files on one clock)."""
 
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ class Published:
     skeleton: _core.Skeleton | None  # None: neither a calibration nor a session says it
     integrity: reader.Integrity
     suits: list = dataclasses.field(default_factory=list)  # several people: (sensor names, skeleton) per suit
+    start_ns: int | None = None  # what times() counts from (None: the first pose's capture)
 
     def subjects(self) -> list[int]:
         """The subject ids of the poses, in order (one person: [0])."""
@@ -41,15 +42,17 @@ class Published:
         poses = [p for p in self.poses if p.subject_id == subject]
         if not poses:
             raise InputError(f"no subject {subject} in this take (subjects: {', '.join(map(str, self.subjects()))})")
-        return Published(poses, worn_skeleton(poses, self.suits, self.skeleton), self.integrity)
+        return Published(poses, worn_skeleton(poses, self.suits, self.skeleton), self.integrity,
+                         start_ns=self.poses[0].capture_time_ns)  # everyone's times on the take's clock
 
     def positions(self) -> np.ndarray:
         """(F, J, 3) m: the joints as published, each frame with the calibration it was solved with."""
         return np.array([[[j.px, j.py, j.pz] for j in p.joints] for p in self.poses])
 
     def times(self) -> np.ndarray:
-        """(F,) s from the first pose's capture."""
-        return np.array([p.capture_time_ns - self.poses[0].capture_time_ns for p in self.poses]) * 1e-9
+        """(F,) s from the first pose's capture (one person of several: the take's first)."""
+        start = self.poses[0].capture_time_ns if self.start_ns is None else self.start_ns
+        return np.array([p.capture_time_ns - start for p in self.poses]) * 1e-9
 
     def thetas(self) -> np.ndarray:
         return np.array([list(p.theta) for p in self.poses])
