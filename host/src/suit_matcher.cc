@@ -11,8 +11,9 @@ namespace {
 
 constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
 constexpr int kChanceShifts = 8;  // chance: the suit's turns shifted by 1/8 ... 7/8 of the window
+constexpr double kChanceEvery = 0.25;  // s: how often a pair's chance is measured again
 
-double Median(std::vector<double> v) {
+double Median(std::vector<double>& v) {  // reorders v
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
 }
@@ -92,8 +93,10 @@ void SuitMatcher::Add(double timestamp, const std::map<uint32_t, BodyPose>& bodi
       for (size_t i = 0; i < sensor_turns.size(); ++i)
         if (!std::isnan(sensor_turns[i] + bone_turns[i]))
           most = std::max({most, sensor_turns[i], bone_turns[i]});
-      if (most >= options_.min_turn_rad)
-        pair.frames.push_back(Turned{timestamp, sensor_turns, bone_turns});
+      if (most >= options_.min_turn_rad) {
+        pair.frames.push_back(Turned{timestamp, sensor_turns, bone_turns, NAN});
+        pair.frames.back().median = MedianDifference(pair.frames.back(), pair.frames.back());
+      }
       DropBefore(timestamp - options_.window_s, &pair.frames);
     }
   }
@@ -106,31 +109,39 @@ void SuitMatcher::Forget(int suit, uint32_t id) {
   if (suit >= 0 && suit < static_cast<int>(wearers_.size())) wearers_[suit] = 0;
 }
 
+double SuitMatcher::MedianDifference(const Turned& suit, const Turned& body) {
+  thread_local std::vector<double> differences;
+  differences.clear();
+  for (size_t i = 0; i < body.bones.size(); ++i)
+    if (!std::isnan(suit.sensors[i] + body.bones[i]))
+      differences.push_back(std::abs(suit.sensors[i] - body.bones[i]));
+  return differences.empty() ? NAN : Median(differences);
+}
+
 double SuitMatcher::Disagreement(const Pair& pair, size_t shift) {
   const size_t n = pair.frames.size();
   double sum = 0;
   int counted = 0;
-  std::vector<double> differences;
   for (size_t f = 0; f < n; ++f) {
-    const std::vector<double>& sensors = pair.frames[(f + shift) % n].sensors;
-    const std::vector<double>& bones = pair.frames[f].bones;
-    differences.clear();
-    for (size_t i = 0; i < bones.size(); ++i)
-      if (!std::isnan(sensors[i] + bones[i]))
-        differences.push_back(std::abs(sensors[i] - bones[i]));
-    if (differences.empty()) continue;
-    sum += Median(differences);
+    const double d = shift == 0 ? pair.frames[f].median  // measured when the frame came
+                                : MedianDifference(pair.frames[(f + shift) % n], pair.frames[f]);
+    if (std::isnan(d)) continue;
+    sum += d;
     counted++;
   }
   return counted ? sum / counted : NAN;
 }
 
-bool SuitMatcher::Admissible(const Pair& pair, double disagreement) const {
+bool SuitMatcher::Admissible(Pair& pair, double disagreement) const {
   if (disagreement <= options_.gate_rad) return true;
-  const size_t n = pair.frames.size();
-  double chance = 0;
-  for (int k = 1; k < kChanceShifts; ++k) chance += Disagreement(pair, k * n / kChanceShifts);
-  return disagreement <= options_.lock_ratio * chance / (kChanceShifts - 1);
+  const double now = pair.frames.back().time;  // chance changes slowly: measured every kChanceEvery
+  if (!(now - pair.chance_time < kChanceEvery)) {
+    const size_t n = pair.frames.size();
+    double sum = 0;
+    for (int k = 1; k < kChanceShifts; ++k) sum += Disagreement(pair, k * n / kChanceShifts);
+    pair.chance = sum / (kChanceShifts - 1), pair.chance_time = now;
+  }
+  return disagreement <= options_.lock_ratio * pair.chance;
 }
 
 std::map<uint32_t, double> SuitMatcher::Disagreements(int suit) const {

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -70,16 +71,21 @@ class SuitMatcher {
   struct Turned {  // a moving frame of a pair: the suit's and the bones' turn angles
     double time;
     std::vector<double> sensors, bones;
+    double median;  // of |sensor turn - bone turn| over the sensors (NaN: none measured)
   };
   struct Pair {
     std::deque<Turned> frames;  // the moving frames of the window
     double first = 0;           // when the pair's history (re)started
+    double chance = NAN;        // its disagreement by chance, as last measured
+    double chance_time = NAN;   // when (NaN: never)
   };
   // The mean over the pair's frames of the median |sensor turn - bone turn|, the sensors' turns
   // taken `shift` frames later (circularly); shift 0: the disagreement.
   static double Disagreement(const Pair& pair, size_t shift);
+  // The median over the sensors of |the suit's turn - the body's bone's turn|, NaN for none.
+  static double MedianDifference(const Turned& suit, const Turned& body);
   // Whether the pair is admissible: within the gate, or time-locked (well below chance).
-  bool Admissible(const Pair& pair, double disagreement) const;
+  bool Admissible(Pair& pair, double disagreement) const;
   // The turn angle of each sensor between the history's entry baseline_s ago and `now`
   // (NaN where either reading is missing); false when the history is too short.
   bool Turns(const std::deque<Timed>& history, const Timed& now, std::vector<double>* angles) const;

@@ -113,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
     if args.intrinsics is not None and args.fov is not None:
         raise InputError("give --intrinsics or --fov, not both")
     if args.connect:
+        if args.compare or args.report:
+            raise InputError("--compare and --report are for --take and --recording (calibrate the recording "
+                             "--connect leaves, --record, with them)")
         return _live(args)
     rig, report, reference = _from_take(args) if args.take else _from_recording(args)
     Path(args.out).write_text(calib_toml.dumps(rig))
