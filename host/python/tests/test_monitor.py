@@ -21,9 +21,9 @@ from mocap.net import wire
 BONES = scene.bones(paths.DEFAULT_SKELETON)
 
 
-def _pose(k: int) -> wire.PoseFrame:
+def _pose(k: int, subject: int = 0) -> wire.PoseFrame:
     pose = wire.PoseFrame(capture_time_ns=1_700_000_000_000_000_000 + k * 16_666_667, frame_index=k,
-                          cameras=["cam1", "cam2"], imus=["pelvis"], latency_ms=0.4)
+                          cameras=["cam1", "cam2"], imus=["pelvis"], latency_ms=0.4, subject_id=subject)
     for b, bone in enumerate(BONES):
         pose.joints.add(name=bone["name"], px=0.1 * b + 0.01 * k, py=-0.05 * b, pz=1.0 + 0.001 * b, qw=1.0)
     return pose
@@ -52,6 +52,14 @@ def test_health_says_which_streams_are_stale_or_distrusted():
     assert shown["camera/cam1"]["state"] == "stale" and shown["camera/cam1"]["late"] == 2
     assert shown["imu/pelvis"]["state"] == "distrusted" and shown["imu/pelvis"]["heading_correction_deg"] == 3.5
     assert messages.health(_health(active=True))["streams"][0]["state"] == "ok"
+
+
+def test_health_of_several_people_carries_the_people_counts_and_of_one_none():
+    health = _health(active=True)
+    assert messages.health(health)["people"] is None
+    health.people.tracked, health.people.born, health.people.suits_worn = 3, 4, 2
+    people = messages.health(health)["people"]
+    assert (people["tracked"], people["born"], people["retired"], people["suits_worn"]) == (3, 4, 0, 2)
 
 
 def test_a_frustum_reaches_the_image_corners():
@@ -120,17 +128,20 @@ class _SlowConnection:
         self.sent.append(json.loads(text))
 
 
-async def _a_slow_page() -> list[dict]:
+async def _a_slow_page(people: int = 1) -> list[dict]:
     connection = _SlowConnection()
     browser = server.Browser(connection)
     pump = asyncio.create_task(browser.pump())
     browser.offer("scene", json.dumps({"type": "scene"}))
     await asyncio.sleep(0)  # the pump is waiting on the page with the scene
+    monitor = server.Monitor([], {})
+    monitor.browsers.add(browser)
     for k in range(100):
-        browser.offer("pose", json.dumps(messages.pose(_pose(k))))
-    browser.offer("health", json.dumps(messages.health(_health(True))))
+        for subject in range(people):
+            monitor.deliver(_pose(k, subject))
+    monitor.deliver(_health(True))
     connection.gate.set()
-    while len(connection.sent) < 3:
+    for _ in range(100):  # what the page gets within 1 s
         await asyncio.sleep(0.01)
     pump.cancel()
     return connection.sent
@@ -140,6 +151,12 @@ def test_a_page_that_falls_behind_skips_poses_but_gets_the_newest_and_every_heal
     sent = asyncio.run(_a_slow_page())
     assert [m["type"] for m in sent] == ["scene", "pose", "health"]
     assert sent[1]["frame"] == 99
+
+
+def test_a_page_that_falls_behind_gets_the_newest_pose_of_every_performer():
+    sent = asyncio.run(_a_slow_page(people=3))
+    assert [m["type"] for m in sent] == ["scene", "pose", "pose", "pose", "health"]
+    assert [(m["subject"], m["frame"]) for m in sent[1:4]] == [(0, 99), (1, 99), (2, 99)]
 
 
 def _monitor_cli(*args):

@@ -18,7 +18,7 @@ DEFAULT_HTTP = "127.0.0.1:8080"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    m = sub.add_parser("monitor", help="serve a browser page showing a running mocapd's skeleton in 3D, the "
+    m = sub.add_parser("monitor", help="serve a browser page showing a running mocapd's skeletons in 3D (every performer), the "
                        "cameras and every stream's health, live")
     m.add_argument("--connect", nargs="+", metavar="EP",
                    help="mocapd's output endpoint(s) (default: the session's `output`)")

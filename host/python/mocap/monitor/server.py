@@ -1,7 +1,7 @@
 """The monitor's server: one asyncio loop subscribing to mocapd's output (ZeroMQ) and serving the
 page (HTTP) and its WebSocket (/ws) on one port. Each browser gets the scene once, then every
-Health and the newest pose: a browser that falls behind skips poses (the page sees the gap in
-the frame index) and never delays the subscriber or another browser."""
+Health and each performer's newest pose: a browser that falls behind skips poses (the page sees
+the gap in the frame index) and never delays the subscriber or another browser."""
 
 from __future__ import annotations
 
@@ -69,7 +69,8 @@ def serve_static(connection: ServerConnection, request: Request) -> Response | N
 
 
 class Browser:
-    """One connected page: the newest message of each kind waits for its turn to be sent."""
+    """One connected page: the newest message of each kind (a pose: of each performer) waits
+    for its turn to be sent."""
 
     def __init__(self, connection: ServerConnection) -> None:
         self.connection = connection
@@ -115,14 +116,19 @@ class Monitor:
                 except wire.WireError:
                     self.received["dropped"] += 1
                     continue
-                if isinstance(message, wire.PoseFrame):
-                    self.received["pose"] += 1
-                    self.publish("pose", messages.pose(message))
-                elif isinstance(message, wire.Health):
-                    self.received["health"] += 1
-                    self.publish("health", messages.health(message))
+                self.deliver(message)
         finally:
             socket.close()
+
+    def deliver(self, message: object) -> None:
+        """A PoseFrame (the newest of each performer kept for each browser) or a Health to
+        every browser; other messages are not shown."""
+        if isinstance(message, wire.PoseFrame):
+            self.received["pose"] += 1
+            self.publish(f"pose/{message.subject_id}", messages.pose(message))
+        elif isinstance(message, wire.Health):
+            self.received["health"] += 1
+            self.publish("health", messages.health(message))
 
     async def page_socket(self, connection: ServerConnection) -> None:
         """One browser's WebSocket: the scene, then what subscribe() offers, until it closes."""

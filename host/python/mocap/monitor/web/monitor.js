@@ -1,6 +1,6 @@
 // The page: a WebSocket to `mocap monitor` (scene, then pose and health messages), the 3D view and
 // the status panel. window.monitor holds what the page shows, for people and for tests.
-import { View } from '/view.js';
+import { COLOURS, View } from '/view.js';
 
 const HEALTH_STALE_MS = 3000;  // mocapd sends Health once a second
 const TEXT_MS = 250;  // the panel's pose lines are rewritten this often (text layout costs a CPU-only host)
@@ -9,15 +9,17 @@ const RECONNECT_MS = 1000;
 const state = window.monitor = {
   connected: false,
   frames: 0,            // poses shown
-  skipped: 0,           // poses the server skipped for this page (gaps in the frame index)
+  skipped: 0,           // frames the server skipped for this page (gaps in the frame index)
   lastFrame: null,      // the last pose message shown
+  poses: {},            // subject id -> its last pose message shown (0: the one performer of a session of one)
+  people: [],           // subject ids drawn (a performer without a pose for 2.5 s is taken away)
   health: null,         // the last Health message
   healthAt: 0,          // its arrival (performance.now())
   streams: {},          // stream name -> {state, rate_hz, ...} as shown
   updateHz: 0,          // poses received and applied during the last second
   get renderHz() { return view.renderHz; },  // 3D frames drawn during the last second
   webgl: false,
-  drawnJoints: () => view.drawnJoints(),
+  drawnJoints: (subject = state.lastFrame?.subject ?? 0) => view.drawnJoints(subject),
 };
 const arrivals = [];
 const view = new View(document.getElementById('view'));
@@ -27,9 +29,12 @@ document.getElementById('no-webgl').hidden = view.ok;
 const text = (id, value) => { document.getElementById(id).textContent = value; };
 const fixed = (x, digits = 1) => (typeof x === 'number' ? x.toFixed(digits) : '–');
 
+const hex = (colour) => `#${colour.toString(16).padStart(6, '0')}`;
+
 function onPose(pose) {
-  if (state.lastFrame && pose.frame > state.lastFrame.frame + 1) state.skipped += pose.frame - state.lastFrame.frame - 1;
-  state.lastFrame = pose;
+  const newest = Math.max(-1, ...Object.values(state.poses).map((p) => p.frame));
+  if (newest >= 0 && pose.frame > newest + 1) state.skipped += pose.frame - newest - 1;
+  state.lastFrame = state.poses[pose.subject] = pose;
   state.frames += 1;
   view.setPose(pose);
   const now = performance.now();
@@ -42,6 +47,25 @@ function onPose(pose) {
   text('status', pose.status + (pose.distrusted.length ? `, distrusted: ${pose.distrusted.join(' ')}` : ''));
   text('update-hz', `${state.updateHz} Hz poses, ${view.renderHz} Hz drawn`);
   text('skipped', state.skipped);
+  showPeople();
+}
+
+// One line per performer drawn, in its colour: its id, its inputs and the IMUs left out.
+function showPeople() {
+  state.people = view.retire();
+  for (const subject of Object.keys(state.poses)) if (!state.people.includes(Number(subject))) delete state.poses[subject];
+  const lines = state.people.map((subject) => {
+    const pose = state.poses[subject], line = document.createElement('div');
+    line.dataset.subject = subject;
+    line.style.color = hex(COLOURS[subject % COLOURS.length][0]);
+    line.textContent = `${subject === 0 ? 'performer' : `person ${subject}`}: ${pose.cameras.length} cameras, `
+      + `${pose.imus.length} IMUs` + (pose.distrusted.length ? `, distrusted: ${pose.distrusted.join(' ')}` : '');
+    return line;
+  });
+  document.getElementById('people').replaceChildren(...lines);
+  const people = state.health?.people;
+  text('people-counts', people ? `${people.tracked} tracked, ${people.born} found, ${people.retired} given up, `
+    + `${people.suits_worn} suits worn` : '–');
 }
 
 function streamRow(s) {
@@ -98,4 +122,4 @@ function connect() {
 }
 
 connect();
-setInterval(checkHostAlive, 250);
+setInterval(() => { checkHostAlive(); showPeople(); }, 250);

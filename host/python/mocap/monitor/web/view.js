@@ -1,9 +1,15 @@
-// The 3D view: the skeleton (bones as lines, joints as spheres), the rig's cameras as frusta
-// (red while their stream is stale) and the floor grid, in the host's world frame (Z up, metres).
+// The 3D view: every performer's skeleton (bones as lines, joints as spheres; one colour per
+// performer), the rig's cameras as frusta (red while their stream is stale) and the floor grid, in
+// the host's world frame (Z up, metres).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
-const BONE = 0x33ccff, JOINT = 0xff9919, CAMERA = 0x8a93a3, CAMERA_STALE = 0xe06060;
+const CAMERA = 0x8a93a3, CAMERA_STALE = 0xe06060;
+// [bones, joints] of performer k (subject id k; 0 in a session of one) is COLOURS[k % length].
+export const COLOURS = [[0x33ccff, 0xff9919], [0x7be07b, 0xe0e040], [0xff7fbf, 0x9f7fff], [0xffb060, 0x40d0d0],
+  [0xd0d0d0, 0xff6060], [0x6080ff, 0xffd080], [0xc0ff60, 0xff60ff], [0x60ffc0, 0xffa0a0]];
+// A performer without a pose this long is taken away (mocapd gives a person up after 2 s unseen).
+export const GONE_MS = 2500;
 // Drawn at most this often: a browser beside the host on a 2-core machine (without a GPU, WebGL
 // renders on the CPU) must leave the host its cores; poses still arrive at the camera rate.
 const MAX_RENDER_HZ = Number(new URLSearchParams(location.search).get('fps')) || 30;  // ?fps=N: another cap
@@ -14,6 +20,7 @@ export class View {
     this.container = container;
     this.names = [];          // joint names in the drawn order (the scene's bones)
     this.parents = [];        // index of each bone's parent, -1 for the root
+    this.figures = new Map(); // subject id -> {positions, seenAt, bones, joints}: the performers drawn
     this.frusta = new Map();  // camera name -> its line material
     this.changed();
     try {
@@ -66,23 +73,49 @@ export class View {
     this.names = scene.bones.map((b) => b.name);
     const index = new Map(this.names.map((n, i) => [n, i]));
     this.parents = scene.bones.map((b) => (b.parent === null ? -1 : index.get(b.parent) ?? -1));
-    this.positions = new Float32Array(this.names.length * 3);
+    for (const subject of [...this.figures.keys()]) this.remove(subject);
     if (!this.ok) return;
-    for (const old of [this.bones, this.joints, ...this.frusta.values()].filter(Boolean)) this.scene.remove(old);
+    for (const old of this.frusta.values()) this.scene.remove(old);
+    this.frusta = new Map(scene.cameras.map((c) => [c.name, this.frustum(c)]));
+    this.changed();
+  }
+
+  // Performer `subject`'s figure, made on its first pose.
+  figure(subject) {
+    let figure = this.figures.get(subject);
+    if (figure) return figure;
+    figure = { positions: new Float32Array(this.names.length * 3), seenAt: 0 };
+    this.figures.set(subject, figure);
+    if (!this.ok) return figure;
+    const [bone, joint] = COLOURS[subject % COLOURS.length];
     const pairs = this.parents.flatMap((p, i) => (p >= 0 ? [p, i] : []));
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pairs.length * 3), 3));
     geometry.userData.pairs = pairs;
-    this.bones = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: BONE }));
-    this.bones.frustumCulled = false;
-    this.joints = new THREE.InstancedMesh(new THREE.SphereGeometry(0.025, 12, 8),
-      new THREE.MeshBasicMaterial({ color: JOINT }), this.names.length);
-    this.joints.frustumCulled = false;
-    this.joints.visible = this.bones.visible = false;  // until the first pose
-    this.scene.add(this.bones, this.joints);
-    this.frusta = new Map(scene.cameras.map((c) => [c.name, this.frustum(c)]));
+    figure.bones = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ color: bone }));
+    figure.joints = new THREE.InstancedMesh(new THREE.SphereGeometry(0.025, 12, 8),
+      new THREE.MeshBasicMaterial({ color: joint }), this.names.length);
+    figure.bones.frustumCulled = figure.joints.frustumCulled = false;
+    this.scene.add(figure.bones, figure.joints);
+    return figure;
+  }
+
+  remove(subject) {
+    const figure = this.figures.get(subject);
+    this.figures.delete(subject);
+    if (!figure?.bones) return;
+    this.scene.remove(figure.bones, figure.joints);
+    for (const object of [figure.bones, figure.joints]) { object.geometry.dispose(); object.material.dispose(); }
     this.changed();
   }
+
+  // Takes away the performers without a pose for GONE_MS; the subject ids still drawn.
+  retire(now = performance.now()) {
+    for (const [subject, figure] of [...this.figures]) if (now - figure.seenAt > GONE_MS) this.remove(subject);
+    return this.people();
+  }
+
+  people() { return [...this.figures.keys()].sort((a, b) => a - b); }
 
   frustum(camera) {
     const [a, b, c, d] = camera.corners, o = camera.centre;
@@ -101,30 +134,36 @@ export class View {
     this.changed();
   }
 
-  // A pose message: joints [[x, y, z]] named by names, in any order; joints it lacks keep their place.
+  // A pose message (of performer pose.subject): joints [[x, y, z]] named by names, in any order;
+  // joints it lacks keep their place.
   setPose(pose) {
-    if (!this.positions) return;
+    if (!this.names.length) return;
+    const figure = this.figure(pose.subject ?? 0), p = figure.positions;
+    figure.seenAt = performance.now();
     const index = new Map(this.names.map((n, i) => [n, i]));
     pose.names.forEach((name, k) => {
       const i = index.get(name);
-      if (i !== undefined) this.positions.set(pose.joints[k], 3 * i);
+      if (i !== undefined) p.set(pose.joints[k], 3 * i);
     });
     if (!this.ok) return;
-    const matrix = new THREE.Matrix4(), p = this.positions;
+    const matrix = new THREE.Matrix4();
     for (let i = 0; i < this.names.length; i++) {
-      this.joints.setMatrixAt(i, matrix.makeTranslation(p[3 * i], p[3 * i + 1], p[3 * i + 2]));
+      figure.joints.setMatrixAt(i, matrix.makeTranslation(p[3 * i], p[3 * i + 1], p[3 * i + 2]));
     }
-    this.joints.instanceMatrix.needsUpdate = true;
-    const line = this.bones.geometry.attributes.position, pairs = this.bones.geometry.userData.pairs;
+    figure.joints.instanceMatrix.needsUpdate = true;
+    const line = figure.bones.geometry.attributes.position, pairs = figure.bones.geometry.userData.pairs;
     pairs.forEach((i, k) => line.setXYZ(k, p[3 * i], p[3 * i + 1], p[3 * i + 2]));
     line.needsUpdate = true;
-    this.follow(p[0], p[1]);
-    this.joints.visible = this.bones.visible = true;
+    this.follow();
     this.changed();
   }
 
-  // Keeps the performer's root in view: the orbit target and the camera move with it on the floor.
-  follow(x, y) {
+  // Keeps the performers in view: the orbit target and the camera move with their roots' mean on
+  // the floor.
+  follow() {
+    const roots = [...this.figures.values()].map((f) => f.positions);
+    const x = roots.reduce((sum, p) => sum + p[0], 0) / roots.length;
+    const y = roots.reduce((sum, p) => sum + p[1], 0) / roots.length;
     const dx = x - this.controls.target.x, dy = y - this.controls.target.y;
     if (Math.hypot(dx, dy) < 1e-4) return;
     this.controls.target.x += dx; this.controls.target.y += dy;
@@ -132,12 +171,14 @@ export class View {
     this.controls.update();
   }
 
-  // The joint centres as drawn: read back from the joint spheres' matrices.
-  drawnJoints() {
+  // Performer `subject`'s joint centres as drawn: read back from its joint spheres' matrices.
+  drawnJoints(subject) {
+    const figure = this.figures.get(subject);
+    if (!figure) return { names: this.names, joints: [] };
     const matrix = new THREE.Matrix4(), v = new THREE.Vector3();
     const joints = this.names.map((_, i) => {
-      if (!this.ok) return Array.from(this.positions.slice(3 * i, 3 * i + 3));  // no WebGL: what would be drawn
-      this.joints.getMatrixAt(i, matrix);
+      if (!this.ok) return Array.from(figure.positions.slice(3 * i, 3 * i + 3));  // no WebGL: what would be drawn
+      figure.joints.getMatrixAt(i, matrix);
       return v.setFromMatrixPosition(matrix).toArray();
     });
     return { names: this.names, joints };
