@@ -12,6 +12,7 @@ namespace {
 constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
 constexpr int kChanceShifts = 8;  // chance: the suit's turns shifted by 1/8 ... 7/8 of the window
 constexpr double kChanceEvery = 0.25;  // s: how often a pair's chance is measured again
+constexpr int kChancePhases = 5;       // pairs measured again on as many different frames
 
 double Median(std::vector<double>& v) {  // reorders v
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -84,7 +85,10 @@ void SuitMatcher::Add(double timestamp, const std::map<uint32_t, BodyPose>& bodi
       for (int b : suit_bones_[s]) bones.rotations.emplace_back(body.rotation[b]);
       std::vector<std::deque<Timed>>& history = subject_history_[id];
       if (history.empty()) history.resize(suits.size());
-      Pair& pair = pairs_.try_emplace({static_cast<int>(s), id}, Pair{{}, timestamp}).first->second;
+      const auto [at, born] =
+          pairs_.try_emplace({static_cast<int>(s), id}, Pair{{}, timestamp, NAN, NAN, pairs_born_});
+      pairs_born_ += born;
+      Pair& pair = at->second;
       const bool bones_turned = Turns(history[s], bones, &bone_turns);
       history[s].push_back(std::move(bones));
       DropBefore(keep_from, &history[s]);
@@ -139,7 +143,11 @@ bool SuitMatcher::Admissible(Pair& pair, double disagreement) const {
     const size_t n = pair.frames.size();
     double sum = 0;
     for (int k = 1; k < kChanceShifts; ++k) sum += Disagreement(pair, k * n / kChanceShifts);
-    pair.chance = sum / (kChanceShifts - 1), pair.chance_time = now;
+    // The pairs born on one frame are measured again on different frames (their phase within
+    // kChanceEvery), not all on one.
+    const double phase = static_cast<double>(pair.slot % kChancePhases) / kChancePhases;
+    pair.chance = sum / (kChanceShifts - 1);
+    pair.chance_time = std::isnan(pair.chance_time) ? now - phase * kChanceEvery : now;
   }
   return disagreement <= options_.lock_ratio * pair.chance;
 }
@@ -180,8 +188,10 @@ void SuitMatcher::Decide(double timestamp) {
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(suit_bones_.size(), ids.size(), NAN);
   std::vector<std::map<uint32_t, double>> admissible(suit_bones_.size());
   double highest = options_.gate_rad;
+  std::vector<std::map<uint32_t, double>> measured(suit_bones_.size());
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
-    for (const auto& [id, d] : Disagreements(static_cast<int>(s)))
+    measured[s] = Disagreements(static_cast<int>(s));
+    for (const auto& [id, d] : measured[s])
       if (Admissible(pairs_.at({static_cast<int>(s), id}), d)) admissible[s][id] = d;
     for (size_t j = 0; j < ids.size(); ++j) {
       const auto it = admissible[s].find(ids[j]);
@@ -196,8 +206,7 @@ void SuitMatcher::Decide(double timestamp) {
     uint32_t& wearer = wearers_[s];
     if (wearer && !subject_history_.count(wearer)) wearer = 0;  // retired
     if (to[s] < 0) {  // its wearer's pair measured and no longer admissible: on nobody
-      const auto measured = Disagreements(static_cast<int>(s));
-      if (wearer && measured.count(wearer) && !admissible[s].count(wearer)) wearer = 0;
+      if (wearer && measured[s].count(wearer) && !admissible[s].count(wearer)) wearer = 0;
       continue;
     }
     if (!Clear(cost, to, static_cast<int>(s)) || wearer == ids[to[s]]) continue;

@@ -78,6 +78,7 @@ class SuitMatcher {
     double first = 0;           // when the pair's history (re)started
     double chance = NAN;        // its disagreement by chance, as last measured
     double chance_time = NAN;   // when (NaN: never)
+    unsigned slot = 0;          // the pair's number, in order of birth
   };
   // The mean over the pair's frames of the median |sensor turn - bone turn|, the sensors' turns
   // taken `shift` frames later (circularly); shift 0: the disagreement.
@@ -100,6 +101,7 @@ class SuitMatcher {
   std::vector<uint32_t> wearers_;
   std::vector<uint32_t> decided_;  // per suit: the last wearer decided (0: none yet)
   uint64_t changes_ = 0;
+  unsigned pairs_born_ = 0;
 };
 
 }  // namespace mocap
