@@ -177,4 +177,4 @@ def test_a_recording_of_several_people_exports_a_file_per_person(tmp_path):
     assert positions.shape[0] == FRAMES - 3 and not (tmp_path / "two_subject1.csv").exists()
     assert abs(times[0] - 3 / 60.0) < 1e-5  # on the take's clock: they came in on its fourth frame
     out = _export(path, "--format", "csv", "--subject", "5", "--out", tmp_path / "five.csv")
-    assert out.returncode == 2 and "no subject 5 (subjects: 1, 2)" in out.stderr, out.stderr
+    assert out.returncode == 2 and "no subject 5 in this take (subjects: 1, 2)" in out.stderr, out.stderr

@@ -130,6 +130,10 @@ def test_bad_input_is_named(simulated, case, message):
 def test_the_command_ends_with_the_reason(tmp_path, capsys):
     assert main(["calibrate-rig", "--take", str(tmp_path), "--height", "1.7", "--out", str(tmp_path / "c.toml")]) == 2
     assert "take.toml" in capsys.readouterr().err
+    live_only = ["--seconds", "5", "--every", "2"]  # a live calibration's: not silently ignored
+    assert main(["calibrate-rig", "--take", str(tmp_path), "--height", "1.7", "--out", str(tmp_path / "c.toml"),
+                 *live_only]) == 2
+    assert "--seconds, --every: for --connect only" in capsys.readouterr().err
 
 
 def _recorded(take, folder, session: bool = True):

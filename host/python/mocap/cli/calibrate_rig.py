@@ -16,6 +16,7 @@ from mocap.errors import InputError
 from mocap.io import calib_toml, take_folder
 
 log = logging.getLogger(__name__)
+LIVE_ONLY = {"seconds": 60.0, "every": 10.0, "record": None, "session": None}  # their defaults
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,8 +37,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     source.add_argument("--connect", nargs="+", metavar="EP",
                         help="live: the camera boxes' endpoints; their streams recorded (--record) and the rig "
                         "estimated from all received so far every --every seconds, written over --out each time")
-    c.add_argument("--seconds", type=float, default=60.0, help="--connect: how long to listen (default 60)")
-    c.add_argument("--every", type=float, default=10.0, help="--connect: seconds between estimates (default 10)")
+    c.add_argument("--seconds", type=float, default=LIVE_ONLY["seconds"], help="--connect: how long to listen (default 60)")
+    c.add_argument("--every", type=float, default=LIVE_ONLY["every"], help="--connect: seconds between estimates (default 10)")
     c.add_argument("--record", default=None, metavar="FILE",
                    help="--connect: the recording of the streams (default: --out's name with .mcap)")
     c.add_argument("--session", default=None,
@@ -85,7 +86,8 @@ def _from_take(args: argparse.Namespace) -> tuple:
 
 def _from_recording(args: argparse.Namespace) -> tuple:
     """The rig, its report, and the rig to compare it with (the recording's session's)."""
-    detections = recorded.read(Path(args.recording))
+    own_intrinsics = args.intrinsics is None and args.fov is None
+    detections = recorded.read(Path(args.recording), with_session=args.compare or own_intrinsics)
     cameras = recorded.intrinsics(detections, args.intrinsics, args.fov)
     rig, report = calibrate.calibrate(cameras, detections.people, detections.layout, detections.rate, args.height)
     if not args.compare:
@@ -117,6 +119,9 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--compare and --report are for --take and --recording (calibrate the recording "
                              "--connect leaves, --record, with them)")
         return _live(args)
+    live_only = [f"--{name}" for name in LIVE_ONLY if getattr(args, name) != LIVE_ONLY[name]]
+    if live_only:
+        raise InputError(f"{', '.join(live_only)}: for --connect only (a live calibration)")
     rig, report, reference = _from_take(args) if args.take else _from_recording(args)
     Path(args.out).write_text(calib_toml.dumps(rig))
     if args.compare:

@@ -42,12 +42,12 @@ def is_recording(path: Path) -> bool:
         return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
-def _from_recording(path: Path, fmt: str, folder: Path) -> dict[int, Path]:
-    """Per subject (0 alone), the recording's published poses as the file `fmt` is exported from
-    (a BVH or a joint CSV), written in folder."""
+def _from_recording(path: Path, fmt: str, folder: Path, subject: int | None) -> dict[int, Path]:
+    """Per subject (0 alone; only `subject` when given), the recording's published poses as the
+    file `fmt` is exported from (a BVH or a joint CSV), written in folder."""
     take = published.read(path)
     sources = {}
-    for subject in take.subjects():
+    for subject in take.subjects() if subject is None else [subject]:
         person = take.of(subject)
         name = folder / f"subject{subject}"
         if fmt in MOTION_FORMATS:
@@ -62,15 +62,15 @@ def _from_recording(path: Path, fmt: str, folder: Path) -> dict[int, Path]:
     return sources
 
 
-def source_files(solved: Path, fmt: str, folder: Path) -> dict[int, Path]:
-    """Per subject (0 alone), the BVH (motion formats) or joint CSV (the others) to export from;
-    written into folder from a recording."""
+def source_files(solved: Path, fmt: str, folder: Path, subject: int | None = None) -> dict[int, Path]:
+    """Per subject (0 alone; only `subject` when given), the BVH (motion formats) or joint CSV
+    (the others) to export from; written into folder from a recording."""
     if solved.is_dir():
         solved = solved / ("take.bvh" if fmt in MOTION_FORMATS else "joints.csv")
     if not solved.is_file():
         raise InputError(f"{solved}: no such file (give a solved take folder, the file to export, or a recording)")
     if is_recording(solved):
-        return _from_recording(solved, fmt, folder)
+        return _from_recording(solved, fmt, folder, subject)
     if (solved.suffix.lower() == ".bvh") != (fmt in MOTION_FORMATS):
         raise InputError(f"{solved}: {fmt} is exported from a " + ("BVH" if fmt in MOTION_FORMATS else "joint CSV"))
     return {0: solved}
@@ -80,8 +80,8 @@ def export(solved: Path, fmt: str, out: Path, bvh_units: str = "cm", subject: in
     """Writes `out` in format `fmt` from a solve (of several people: a file per person, or
     `subject`'s alone); what it holds and its convention."""
     with tempfile.TemporaryDirectory() as folder:
-        sources = source_files(Path(solved), fmt, Path(folder))
-        if subject is not None:
+        sources = source_files(Path(solved), fmt, Path(folder), subject)
+        if subject is not None:  # a take folder or file: the one person it holds
             if subject not in sources:
                 raise InputError(f"{solved}: no subject {subject} (subjects: {', '.join(map(str, sources))})")
             sources = {subject: sources[subject]}

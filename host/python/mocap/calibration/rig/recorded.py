@@ -34,9 +34,10 @@ class Detections:
     session_rig: _core.Rig | None  # the attached session's, if any
 
 
-def read(path: Path) -> Detections:
-    """Every camera's detections of recording `path` on common frames; InputError when it has
-    no camera frames, or frames of several keypoint layouts."""
+def read(path: Path, with_session: bool = True) -> Detections:
+    """Every camera's detections of recording `path` on common frames, and the rig of its
+    attached session (with_session: unless the intrinsics and no comparison come from elsewhere);
+    InputError when it has no camera frames, or frames of several keypoint layouts."""
     by_camera: dict[str, list[wire.KeypointFrame]] = {}
     with reader.Recording(path) as recording:
         for message in recording.messages():
@@ -47,9 +48,7 @@ def read(path: Path) -> Detections:
                     continue  # counted when recorded
                 if isinstance(frame, wire.KeypointFrame) and frame.detected:
                     by_camera.setdefault(frame.camera_id, []).append(frame)
-        with tempfile.TemporaryDirectory() as folder:
-            found = recording.session(folder)
-            session_rig = None if found is None else _core.Rig.load(str(Session.load(found).file("rig")))
+        session_rig = _session_rig(recording) if with_session else None
     if not by_camera:
         raise InputError(f"{path}: no camera frames with detections ({CAMERA_TOPIC}*) in this recording")
     layouts = {f.keypoint_layout for frames in by_camera.values() for f in frames}
@@ -62,6 +61,12 @@ def read(path: Path) -> Detections:
     people = [on_frames(by_camera[c], times, 0.5e9 / rate, KEYPOINTS[layout]) for c in cameras]
     sizes = {c: (by_camera[c][0].image_width, by_camera[c][0].image_height) for c in cameras}
     return Detections(cameras, sizes, layout, rate, people, session_rig)
+
+
+def _session_rig(recording: reader.Recording) -> _core.Rig | None:
+    with tempfile.TemporaryDirectory() as folder:
+        found = recording.session(folder)
+        return None if found is None else _core.Rig.load(str(Session.load(found).file("rig")))
 
 
 def common_frames(by_camera: dict[str, list]) -> tuple[np.ndarray, float]:
