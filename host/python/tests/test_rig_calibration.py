@@ -70,8 +70,12 @@ def test_the_balancing_trial_calibrates_itself_near_its_board_and_solves(tmp_pat
     rig = result["rig"]
     assert rig["position_cm_max"] < 3.0 and rig["orientation_deg_max"] < 1.0, rig
     assert abs(rig["scale_error_pct"]) < 4.0
-    # with the board's rig 2.9 cm: Pose2Sim's markers were triangulated with it
-    assert result["distance_cm"] < 4.5 and result["statuses"].get("ok", 0) >= 95
+    # the same solve with the board's rig, whose markers Pose2Sim triangulated with that rig:
+    # within 0.5 cm of it once the worlds are aligned where the person is (by the camera
+    # centres alone: 3.7 cm, against 2.9)
+    board = balancing_take.evaluate(TRIAL_CACHE, tmp_path / "board")
+    assert result["distance_cm"] < board["distance_cm"] + 0.5, (result["distance_cm"], board["distance_cm"])
+    assert result["aligned_by_the_cameras"]["distance_cm"] < 4.5 and result["statuses"].get("ok", 0) >= 95
     assert calib_toml.load(tmp_path / "take" / balancing_take.SELF).cameras[0].name == "cam_01"
 
 

@@ -13,8 +13,10 @@ import numpy as np
 
 from mocap.calibration.rig import calibrate as rig_calibrate
 from mocap.calibration.rig import compare as rig_compare
+from mocap.calibration.rig import views as rig_views
 from mocap.eval import real_trial
 from mocap.io import calib_toml, retarget, take_folder
+from mocap.io.take_folder import KEYPOINTS
 from mocap.io.demo_data import TRIAL
 from mocap.io.joints_csv import read_positions_csv, write_positions_csv
 from mocap.io.trc import POSE2SIM_MARKERS, read_trc
@@ -89,20 +91,30 @@ def evaluate(trial: Path, out: Path, settings: Sequence[str] = ()) -> dict:
 def evaluate_self_calibrated(trial: Path, out: Path, height_m: float, settings: Sequence[str] = ()) -> dict:
     """`mocap eval-edge --take-solve OUT --self-calibrate H`: the take with its board calibration
     replaced by one made from its own detections (mocap.calibration.rig, the person H metres tall),
-    solved, and its joints brought into the board's world by the similarity that takes the
-    self-calibrated camera centres onto the board's before the comparison with Pose2Sim's TRC
-    (whose markers were triangulated with the board's rig); `rig`: the rigs' comparison."""
+    solved, and its joints brought into the board's world before the comparison with Pose2Sim's
+    TRC (whose markers were triangulated with the board's rig): by the similarity between the
+    take's detections triangulated through each rig (the figures at the top level), and by the
+    one that takes the self-calibrated camera centres onto the board's (`aligned_by_the_cameras`);
+    `rig`: the rigs' comparison."""
     folder = write(trial, out / "take")
     take = take_folder.read_take(folder)
     rig, _ = rig_calibrate.calibrate(list(take.rig.cameras), take.people, take.layout, take.frame_rate, height_m)
     (folder / SELF).write_text(calib_toml.dumps(rig))
     _take_toml(folder, SELF)
     report = take_solve.solve_take(folder, out / "solved", settings)
-    s, r, t = rig_compare.similarity(rig_compare.centres(rig), rig_compare.centres(take.rig))
-    aligned = out / "solved" / "joints_in_the_boards_world.csv"
-    _moved_joints(out / "solved" / "joints.csv", aligned, s * r, t)
+    keypoints = KEYPOINTS[take.layout]
+    detections = np.stack([rig_views.person_in_view(p, keypoints) for p in take.people], axis=1)  # (F, C, K, 3)
+    by_the_scene, points, residual = rig_compare.by_the_scene(rig, take.rig, detections)
+    compared = {}
+    for name, (s, r, t) in (("scene", by_the_scene),
+                            ("cameras", rig_compare.similarity(rig_compare.centres(rig), rig_compare.centres(take.rig)))):
+        aligned = out / "solved" / f"joints_in_the_boards_world_by_the_{name}.csv"
+        _moved_joints(out / "solved" / "joints.csv", aligned, s * r, t)
+        compared[name] = compare(trial, aligned, report["frame_rate"])
     return {"statuses": report["solve"]["statuses"], "settings": list(settings), "height_m": height_m,
-            "rig": rig_compare.compare(rig, take.rig), **compare(trial, aligned, report["frame_rate"])}
+            "rig": rig_compare.compare(rig, take.rig), **compared["scene"],
+            "scene_alignment": {"points": points, "median_distance_cm": 100 * residual},
+            "aligned_by_the_cameras": {k: compared["cameras"][k] for k in ("distance_cm", "per_joint_cm")}}
 
 
 def _moved_joints(source: Path, target: Path, linear: np.ndarray, shift: np.ndarray) -> None:
