@@ -113,6 +113,36 @@ def test_a_newcomer_is_found_while_others_are_tracked_only_when_the_detector_loo
         assert counts[8:] == ([1] * (found_at - 8) + [2] * (30 - found_at) if found_at else [1] * 22), (every, counts)
 
 
+class OneBehindAnother(FakeDetector):
+    """Two people whose regions' centres lie a fifth of a region apart, one behind the other:
+    the detector finds both; each region's landmarks read the person nearest its centre, or,
+    `one_person`, the same person in both (a second region on the first person)."""
+
+    SIZE, FRONT, BEHIND = 100.0, np.array([100.0, 100.0]), np.array([120.0, 100.0])
+
+    def __init__(self, one_person: bool = False) -> None:
+        super().__init__()
+        self.one_person = one_person
+
+    def detect(self, image: np.ndarray) -> list[Roi]:
+        return [Roi(self.FRONT.copy(), self.SIZE), Roi(self.BEHIND.copy(), self.SIZE)]
+
+    def _person(self, image: np.ndarray, region: Roi) -> Person:
+        behind = not self.one_person and np.linalg.norm(region.centre - self.BEHIND) < 5
+        who = self.BEHIND if behind else self.FRONT
+        spread = np.linspace(-30, 30, len(self.layout))  # a tall figure about its centre
+        keypoints = np.stack([np.full(len(self.layout), who[0]), who[1] + spread, np.ones(len(self.layout))], 1)
+        return Person(keypoints, 0.9 if behind else 1.0, Roi(who.copy(), self.SIZE))
+
+
+def test_a_person_behind_another_is_kept_and_a_second_region_on_one_person_is_not() -> None:
+    image = np.zeros((200, 240, 3), np.uint8)
+    people = Tracker(OneBehindAnother(), max_people=4).step({"c": image})["c"]
+    assert sorted(p.keypoints[0, 0] for p in people) == [100.0, 120.0]  # both, 20 px apart
+    people = Tracker(OneBehindAnother(one_person=True), max_people=4).step({"c": image})["c"]
+    assert len(people) == 1 and people[0].keypoints[0, 0] == 100.0
+
+
 def test_the_tracker_drops_people_below_the_models_presence_threshold() -> None:
     image = fake_frames(1)[0].image
     assert len(Tracker(FakeDetector(presence=0.6)).step({"c": image})["c"]) == 1

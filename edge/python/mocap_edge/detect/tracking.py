@@ -29,6 +29,12 @@ from mocap_edge.detect.layouts import Layout
 
 MIRROR_COST = 1e-3  # region sizes per keypoint and frame: the prior against the mirrored reading
 HOLD_FRAMES = 60  # a correction no frame supports lasts at most this long (1 s at 60 fps)
+# A detected region whose centre lies this near a tracked one's (in region sizes) is that
+# person. Nearer than people stand: one behind another is a region of its own, read by the
+# landmark model and dropped after it only if it read the same person (SAME_PERSON).
+NEW_REGION_APART = 0.1
+SAME_PERSON = 0.15  # median distance between two people's confident keypoints, in region sizes
+SURE_KEYPOINT = 0.5  # confidence
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,16 +144,27 @@ def _merge(tracked: list, found: list) -> list:
     """Tracked (region, left/right state) first, then detected ones that are not one of them."""
     out = list(tracked)
     for r, k in found:
-        if all(np.hypot(*(r.centre - t.centre)) > 0.3 * max(r.size, t.size) for t, _ in out):
+        if all(np.hypot(*(r.centre - t.centre)) > NEW_REGION_APART * max(r.size, t.size) for t, _ in out):
             out.append((r, k))
     return out
 
 
+def _same_person(a: Person, b: Person) -> bool:
+    """Whether two readings are of one person: their keypoints (the confident in both, else
+    all) lie within SAME_PERSON region sizes of each other (median)."""
+    both = (a.keypoints[:, 2] > SURE_KEYPOINT) & (b.keypoints[:, 2] > SURE_KEYPOINT)
+    if both.sum() < 5:
+        both[:] = True
+    apart = np.median(np.linalg.norm(a.keypoints[both, :2] - b.keypoints[both, :2], axis=1))
+    return bool(apart <= SAME_PERSON * max(a.next_roi.size, b.next_roi.size))
+
+
 def _distinct(people: list[Person]) -> list[Person]:
-    """Drops a person whose crop converged onto another's (the one with less presence)."""
+    """Drops a person whose crop converged onto another's (the one with less presence): two
+    regions near each other may hold two people, one behind the other."""
     people = sorted(people, key=lambda p: -p.presence)
     kept: list[Person] = []
     for p in people:
-        if all(np.hypot(*(p.next_roi.centre - k.next_roi.centre)) > 0.3 * k.next_roi.size for k in kept):
+        if not any(_same_person(p, k) for k in kept):
             kept.append(p)
     return kept
