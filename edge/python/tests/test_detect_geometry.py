@@ -77,3 +77,14 @@ def test_heatmap_simcc_and_regression_decoders():
     np.testing.assert_allclose(decoders.decode_simcc(sx, sy), [[50, 150, 0.8], [3.5, 4.5, 0.5]])
     raw = np.array([[12.0, 34.0, 0.0, 0.0, 100.0], [1.0, 2.0, 0.0, -100.0, 100.0]]).reshape(-1)
     np.testing.assert_allclose(decoders.decode_regression(raw, 2), [[12, 34, 0.5], [1, 2, 0]], atol=1e-12)
+
+
+def test_tiles_cover_the_long_side_in_half_overlapping_squares():
+    from mocap_edge.detect.blazepose import tiles
+
+    portrait = tiles(1088, 1920)
+    assert [t.size for t in portrait] == [1088.0] * 3
+    np.testing.assert_allclose([t.centre for t in portrait], [[544, 544], [544, 960], [544, 1376]])
+    landscape = tiles(1920, 1080)
+    np.testing.assert_allclose([t.centre for t in landscape], [[540, 540], [960, 540], [1380, 540]])
+    assert tiles(640, 640) == [] and tiles(640, 700) == []  # nearly square: the whole image suffices

@@ -118,7 +118,7 @@ def evaluate(trial: Path, settings: Sequence[str] = ()) -> dict:
     videos = edge_detector.load_trial(trial)
     model = edge_detector.BlazePose()
     found, speed = edge_detector.run(model, videos)
-    naive, naive_speed = edge_detector.run(model, videos, pack=False)
+    naive, naive_speed = edge_detector.run(edge_detector.whole_image(model), videos, pack=False)
     keypoints = np.zeros((len(found), len(videos[edge_detector.CAMERAS[0]]), 33, 3))
     for i, c in enumerate(edge_detector.CAMERAS):
         for f, person in enumerate(found[c]):
