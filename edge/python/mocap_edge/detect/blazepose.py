@@ -72,9 +72,10 @@ class BlazePose(Detector):
 
 def tiles(width: int, height: int) -> list[roi.Roi]:
     """Square regions of the image's short side along its long side, each overlapping the
-    next by half (none for an image nearly square: each would be nearly the whole). Letterboxed whole, a 1088 x 1920 image shrinks
-    8.6 times into the detector's 224 pixels and a person standing far back to a few dozen:
-    missed; a tile shrinks it 4.9 times (Pose2Sim's multi-person trial, camera 3)."""
+    next by half (none for an image nearly square: each would be nearly the whole).
+    Letterboxed whole, a 1088 x 1920 image shrinks 8.6 times into the detector's 224 pixels
+    and a person standing far back to a few dozen: missed; a tile shrinks it 4.9 times
+    (Pose2Sim's multi-person trial, camera 3)."""
     short, long = sorted((width, height))
     if long < 1.25 * short:
         return []

@@ -35,9 +35,9 @@ class Detections:
 
 
 def read(path: Path, with_session: bool = True) -> Detections:
-    """Every camera's detections of recording `path` on common frames, and the rig of its
-    attached session (with_session: unless the intrinsics and no comparison come from elsewhere);
-    InputError when it has no camera frames, or frames of several keypoint layouts."""
+    """Every camera's detections of recording `path` on common frames and, with_session, the
+    rig of its attached session (for its intrinsics, or to compare with); InputError when it
+    has no camera frames, or frames of several keypoint layouts."""
     by_camera: dict[str, list[wire.KeypointFrame]] = {}
     with reader.Recording(path) as recording:
         for message in recording.messages():
