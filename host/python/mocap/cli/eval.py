@@ -9,7 +9,7 @@ from pathlib import Path
 
 from mocap import paths
 from mocap.errors import InputError
-from mocap.eval import people, real_people, simulated, tables, tables_heading, take_truth
+from mocap.eval import floors, people, real_people, simulated, tables, tables_heading, take_truth
 from mocap.sim import detector, extremes, take
 
 PRESETS = ["hq13", "hs13", "hq6", "hs6"]
@@ -26,6 +26,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--multiperson-trial", action="store_true",
                    help="instead: Pose2Sim's real multi-person trial (Demo_MultiPerson, fetched on first use) "
                         "detected by the camera box's detector, tracked and solved from video; figures to --json")
+    e.add_argument("--floors", action="store_true",
+                   help="instead: what each bone's measurements allow, beside the solve's error per bone: a "
+                        "sensor's own error; for a bone without one, its orientation fitted to one frame's "
+                        "detections with every other bone at the truth (mocap.eval.floors); to --json")
     e.add_argument("--sheet", metavar="JPG", help="--multiperson-trial: a contact sheet of frames with the ids drawn")
     e.add_argument("--no-suits", action="store_true", help="--people: video only (default: each wears a suit of "
                    "13 IMUs calibrated on them, which the tracker finds on them from motion)")
@@ -95,6 +99,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"no such BVH file: {', '.join(missing) or ' '.join(args.motion)}")
     if args.people is not None:
         return _people(args, clips)
+    if args.floors:
+        return _floors(args, clips)
     bends, slips = tuple(map(extremes.Bend.parse, args.bend)), tuple(map(extremes.Slip.parse, args.slip))
     config = take.Config(preset=args.preset, cameras=args.cameras,
                          detector=dataclasses.replace(detector.DetectorErrors(), site_offsets=args.site_offsets == "on"),
@@ -110,6 +116,21 @@ def run(args: argparse.Namespace) -> int:
         told = {k: r[k] for k in ("extremes", "distrusted", "upside_down_frames", "cameras_lost") if r.get(k)}
         if told:
             print(json.dumps({"clip": r["clip"], **told}), flush=True)
+    return 0
+
+
+def _floors(args: argparse.Namespace, clips: list[Path]) -> int:
+    config = take.Config(preset=args.preset, cameras=args.cameras)
+    results = []
+    for clip in clips:
+        r = floors.evaluate(clip, config, args.seed)
+        solved = simulated.evaluate(clip, config, [], args.seed, args.set, calibration="oracle")
+        r["solve_deg"] = {b: e["ori_deg"] for b, e in solved["per_joint"].items()}
+        results.append(r)
+        print(json.dumps({"clip": str(clip), "solve_deg": round(solved["ori_error_deg"], 2),
+                          "floors_deg": {b: round(f["floor_deg"], 1) for b, f in r["floors"].items()},
+                          "sensors_deg": {b: round(e, 1) for b, e in r["sensors_deg"].items()}}), flush=True)
+    Path(args.json).write_text(json.dumps(results, indent=1) + "\n")
     return 0
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from mocap import paths
 from mocap.eval import simulated as evaluation
-from mocap.eval import tables_calibration
+from mocap.eval import tables_calibration, tables_floors
 from mocap.model import prior
 from mocap.sim import take
 
@@ -63,6 +63,7 @@ def compute(seed: int = 0) -> dict:
     out = {"seed": seed, "clips": [c.relative_to(paths.shared_file("data/mocap")).as_posix() for c in clips]}
     out["configurations"] = {p: _run(clips, take.Config(preset=p), seed=seed) for p in take.PRESETS}
     out["estimated"] = tables_calibration.compute(clips, seed)
+    out["floors"] = tables_floors.compute(clips, seed)
     out["baselines"] = {b: _run(clips, take.Config(preset="hq13"), baseline=b, seed=seed)
                         for b in ("triangulation", "imu-only")}
     out["baselines"]["imu-only-6"] = _run(clips, take.Config(preset="hq6"), baseline="imu-only", seed=seed)
@@ -196,7 +197,7 @@ def markdown(r: dict, command: str) -> str:
              "trigger) and synchronised by the C++ `InputPath` that `mocapd` runs.",
              "Real video (the edge detector and a video-only solve of Pose2Sim's Balancing trial):",
              "`docs/results_real.md`.", ""]
-    lines += _configurations(r) + [""] + _ablations(r) + [""] + _cameras_and_subsampling(r) + [""] + _tuning(r)
+    lines += _configurations(r) + [""] + tables_floors.markdown(r) + [""] + _ablations(r) + [""] + _cameras_and_subsampling(r) + [""] + _tuning(r)
     lines += ["", "## Accuracy targets", "", "| target | measured | |", "|---|---|---|"]
     lines += [f"| {t} | {m} | {'met' if ok else '**missed**'} |" for t, m, ok in targets(r)]
     lines += tables_calibration.markdown(r)
