@@ -3,6 +3,7 @@ orientation again from the keypoints it moves, and the sensors' own errors are t
 simulation put in."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -66,3 +67,15 @@ def test_a_sensors_own_error_is_what_the_simulation_put_in(shared):
     assert len(exact) == 13 and max(exact.values()) < 1e-6, exact  # mountings up to 20 degrees, references too
     spec = floors.sensor_errors(_take(shared))
     assert all(0.3 < e < 10.0 for e in spec.values()), spec
+
+
+def test_the_command_writes_each_bones_floor_beside_the_solve(shared, tmp_path):
+    from mocap.cli.main import main
+
+    out = tmp_path / "floors.json"
+    assert main(["eval", "--floors", "--motion", str(shared / CLIP), "--json", str(out)]) == 0
+    (result,) = json.loads(out.read_text())
+    assert set(result["floors"]) == set(UNSENSED) and len(result["sensors_deg"]) == 13
+    assert len(result["solve_deg"]) == 21
+    # the solve holds a sensed bone within a few degrees of its sensor's own error
+    assert result["solve_deg"]["thigh_l"] < result["sensors_deg"]["thigh_l"] + 2.0

@@ -25,6 +25,7 @@ from mocap.sim.take import Config, Take, simulate
 PIXEL_SCALE = 5.0  # px: E_P's Cauchy scale (SolverOptions.position, 1 / 25 with loss scale 1)
 MIN_CONFIDENCE = 0.05  # SolverOptions.min_confidence
 ITERATIONS = 10
+MIN_DETECTIONS = 3  # fewer: the frame counts as unobserved (one stray detection would be fitted exactly)
 DAMPING = 1e-3  # keeps an unobserved direction where it started (observed ones: ~1e2 per detection)
 
 
@@ -59,11 +60,11 @@ def _subtree_shifts(parents: np.ndarray, offsets: np.ndarray, j: int, bones: np.
 
 def _fit(rig, truth_points, r_j, lever, detections) -> tuple[np.ndarray, int]:
     """Rotation vector (bone frame) of bone j that best explains one frame's detections
-    (C, K, 3), and the number of detections used."""
+    (C, K, 3), and the number of detections used (0: fewer than MIN_DETECTIONS)."""
     cams = [(c, np.flatnonzero(detections[c, :, 2] > MIN_CONFIDENCE)) for c in range(len(rig.cameras))]
     cams = [(c, ks) for c, ks in cams if len(ks)]
     used = sum(len(ks) for _, ks in cams)
-    if not used:
+    if used < MIN_DETECTIONS:
         return np.zeros(3), 0
 
     def residuals(w):
@@ -98,7 +99,9 @@ def _fit(rig, truth_points, r_j, lever, detections) -> tuple[np.ndarray, int]:
 
 def keypoint_floors(t: Take, bones: list[str], sites: np.ndarray | None = None, stride: int = 5) -> dict[str, dict]:
     """Per bone: the single-frame fit's mean and median error (deg) over the frames (every
-    `stride`-th) with a detection it moves, and the share of frames with none. sites: the
+    `stride`-th) with MIN_DETECTIONS of the keypoints it moves, and the share of frames with
+    fewer. Every other bone is held at the truth: a floor for a bone whose neighbours carry
+    sensors (the 13-IMU set); a chain of bones without any is not estimated jointly. sites: the
     keypoints' offsets on their bones the fit assumes (default: the layout's nominal ones, as
     the oracle solve knows them; t.detector_sites: a calibration that found them exactly)."""
     names, parents = t.skeleton.bone_names, np.asarray(t.skeleton.parents)

@@ -29,8 +29,9 @@ def markdown(r: dict) -> list[str]:
              "bone's orientation fitted to one frame's detections of the keypoints it moves, everything else at "
              "the truth, with the layout's nominal keypoint sites (as this solve knows them) and with the "
              "detector's true sites (a calibration that found them exactly); a direction no keypoint observes "
-             "(a toe's roll, a neck's twist) is left at the truth. 131 clips: the three held-out dance clips.", "",
-             "| bone | solve | solve, 131 clips | sensor | floor, nominal sites | floor, true sites | frames no keypoint sees |",
+             "(a toe's roll, a neck's twist) is left at the truth; frames with fewer than three detections of the "
+             "keypoints it moves are left out (their share in the last column). 131 clips: the three held-out dance clips.", "",
+             "| bone | solve | solve, 131 clips | sensor | floor, nominal sites | floor, true sites | frames left out |",
              "|---|---|---|---|---|---|---|"]
     dance = [i for i, c in enumerate(solved) if Path(c["clip"]).stem.startswith("131")]
     for b in bones:
