@@ -5,12 +5,12 @@ solver makes of them (`mocap eval --floors`, and a table of docs/results.md).
   reference against the true bone (the simulated MTw's spec error, drift and soft-tissue wobble).
 - A bone without one: its orientation fitted to one frame's detections of the keypoints it
   moves (its own, and those of the bones beyond it, shifted with it), every other bone's world
-  orientation and the root at the truth, started at the truth: Gauss-Newton with the solver's
-  E_P (Cauchy at 5 px, confidence-weighted). A direction no keypoint observes (a toe's roll, a
+  orientation and the root at the truth, started at the truth: Levenberg-Marquardt on the
+  solver's E_P (Cauchy at 5 px, confidence-weighted). A direction no keypoint observes (a toe's roll, a
   neck's or a clavicle's twist) stays at the truth, so the figure is a floor: no per-frame solve
-  from these detections does better without a prior that knows the answer. Frames on which
-  none of those keypoints is detected are counted apart: there only a prior or the motion can
-  say anything.
+  from these detections does better without a prior that knows the answer. Frames with fewer
+  than MIN_DETECTIONS detections of those keypoints are counted apart: there only a prior or the
+  motion can say anything.
 """
 
 from __future__ import annotations

@@ -43,6 +43,7 @@ def markdown(r: dict) -> list[str]:
             cells = ["", *(f"{_mean(f['floors'][b][k] for f in fl):.1f}" for k in ("floor_deg", "floor_true_sites_deg")),
                      f"{_mean(f['floors'][b]['unobserved_pct'] for f in fl):.0f}%"]
         lines.append(f"| {b} | {solve:.1f} | {solve_131:.1f} | " + " | ".join(cells) + " |")
+
     def allowed(key: str) -> float:  # each bone its sensor's error or its floor, averaged over bones
         return float(np.mean([_mean(f["sensors_deg"].get(b, f["floors"].get(b, {}).get(key)) for f in fl)
                               for b in bones]))
