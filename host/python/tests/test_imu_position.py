@@ -76,6 +76,22 @@ def test_a_gap_in_the_readings_leaves_the_longest_run():
     assert placed.frames == 0 and np.allclose(placed.offset, imu_position.usual_place(SKELETON, SITE.bone))
 
 
+def test_frames_missing_from_the_readings_break_the_run():
+    """A live recording under load drops late frames: the frames on both sides of the hole are
+    not consecutive, and a second difference across it is no acceleration. The estimate keeps
+    to the longest evenly spaced run."""
+    thetas, q, a = motion(SKELETON, 300)
+    kept = np.r_[0:130, 133:300]  # three frames dropped: 167 evenly spaced frames remain after
+    told = _core.ImuSite()
+    told.name, told.bone, told.mount, told.offset = SITE.name, SITE.bone, SITE.mount, SITE.offset
+    told.reference = rotations.exp(np.array([0.0, 0.0, 0.7 + np.radians(25.0)]))
+    placed = imu_position.estimate(SKELETON, told, thetas[kept], TIMES[kept], q[kept], a[kept], heading_search=True)
+    assert placed.frames <= 167
+    assert abs(np.degrees(placed.heading_rad - 0.7)) < 0.5, np.degrees(placed.heading_rad)
+    assert np.linalg.norm(placed.offset - SITE.offset) < 0.005, placed.offset
+    assert imu_position.longest_run(np.ones(len(kept), bool), TIMES[kept]) == (130, 297)
+
+
 def test_the_heading_comes_back_from_the_accelerometer():
     """A reference told 25 degrees off in yaw: the accelerometer's horizontal part says by how
     much, and the offset is found with the heading it settles on."""

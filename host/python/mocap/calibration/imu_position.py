@@ -31,6 +31,7 @@ SMOOTH_FRAMES = 4.0  # Gaussian sigma, frames
 PRIOR_M = 0.1  # ridge: sigma of the offset around the usual place, m
 ACCEL_SIGMA = 1.0  # m/s^2: the smoothed acceleration's typical misfit (the ridge's scale)
 MIN_FRAMES = 60
+GAP_STEPS = 1.5  # a step this many times the median one: frames are missing there
 # The residuals of Gaussian-smoothed series are correlated over about 2 sqrt(pi) sigma
 # frames: the heading's variance from the curvature is widened by as much.
 CORRELATED_FRAMES = 2.0 * np.sqrt(np.pi) * SMOOTH_FRAMES
@@ -62,15 +63,22 @@ def _smooth(x: np.ndarray, sigma: float) -> np.ndarray:
     return out.reshape((len(out),) + x.shape[1:])
 
 
-def longest_run(ok: np.ndarray) -> tuple[int, int]:
-    """[lo, hi) of the longest run of True."""
+def longest_run(ok: np.ndarray, times: np.ndarray | None = None) -> tuple[int, int]:
+    """[lo, hi) of the longest run of True; with times, a step longer than GAP_STEPS of the
+    median step (frames dropped on the way: a second difference across it is no acceleration)
+    breaks a run too."""
+    ok = np.asarray(ok, dtype=bool)
+    starts = np.zeros(len(ok), dtype=bool)  # a frame after a gap begins a new run
+    if times is not None and len(times) > 1:
+        steps = np.diff(times)
+        starts[1:] = steps > GAP_STEPS * np.median(steps)
     best, start = (0, 0), None
     for i, v in enumerate(np.append(ok, False)):
-        if v and start is None:
-            start = i
-        elif not v and start is not None:
+        if start is not None and (not v or (i < len(ok) and starts[i])):
             best = max(best, (start, i), key=lambda r: r[1] - r[0])
             start = None
+        if v and start is None:
+            start = i
     return best
 
 
@@ -123,7 +131,7 @@ def estimate(skeleton: _core.Skeleton, site: _core.ImuSite, thetas: np.ndarray, 
     then solved with."""
     prior = usual_place(skeleton, site.bone)
     ok = np.isfinite(quaternions).all(axis=1) & np.isfinite(accelerations).all(axis=1) & np.isfinite(thetas).all(axis=1)
-    lo, hi = longest_run(ok)  # the filter needs an unbroken run
+    lo, hi = longest_run(ok, np.asarray(times, dtype=float))  # the filter needs an unbroken, evenly spaced run
     if hi - lo < MIN_FRAMES:
         return ImuPosition(prior, 0, float("nan"))
     thetas, times, quaternions, accelerations = thetas[lo:hi], times[lo:hi], quaternions[lo:hi], accelerations[lo:hi]
