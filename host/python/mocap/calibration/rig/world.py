@@ -2,8 +2,11 @@
 person, the origin on the floor under them, X the way they face on average.
 
 Scale: the person's median shin, thigh and trunk (mid-hip to mid-shoulder) lengths over the
-take, against their shares of body height in Winter's anthropometric table (0.246, 0.245 and
-0.288 of the height: "Biomechanics and Motor Control of Human Movement", 4th ed., fig. 4.1).
+take and, when the layout has a head-top keypoint, the mid-shoulder to head-top length: standing,
+these four stack into the height but for the ankle's height above the floor (3.9% of it). Without
+a head top, the three against their shares of body height (0.246, 0.245 and 0.288): a population's
+proportions, a few percent off a given person's. Shares from Winter's anthropometric table
+("Biomechanics and Motor Control of Human Movement", 4th ed., fig. 4.1).
 Up: the normal of the floor the still feet stand on when they cover an area; otherwise the
 person's mean standing axis (the foot they stand on to their shoulders), which leans with
 their posture, levelled along the feet's path when they walk a line.
@@ -23,6 +26,7 @@ SHARE_OF_HEIGHT = {"shin": 0.246, "thigh": 0.245, "trunk": 0.288}
 SEGMENTS = {"shin": [("left_knee", "left_ankle"), ("right_knee", "right_ankle")],
             "thigh": [("left_hip", "left_knee"), ("right_hip", "right_knee")],
             "trunk": [(("left_hip", "right_hip"), ("left_shoulder", "right_shoulder"))]}
+HEAD = [(("left_shoulder", "right_shoulder"), "HeadTop")]  # OpenPose BODY_25B's top of the head
 MIN_MEASURES = 10  # frames (and sides) a segment must be measured on to count
 ANKLE_HEIGHT = 0.039  # of the body height, when no heel or toe keypoint marks the floor
 STILL_M_S = 0.15  # a foot keypoint slower than this stands on the floor
@@ -58,8 +62,12 @@ def _segment(kp: dict, pairs: list[tuple]) -> float:
 
 
 def body_height(kp: dict) -> float:
-    """The height (in the points' units) the median segment lengths imply."""
+    """The height (in the points' units) the median segment lengths imply: the shin, thigh,
+    trunk and head stacked when all four were measured, else the shares of those that were."""
     lengths = {name: _segment(kp, pairs) for name, pairs in SEGMENTS.items()}
+    head = _segment(kp, HEAD) if "HeadTop" in kp else np.nan
+    if np.isfinite([head, *lengths.values()]).all():
+        return (head + sum(lengths.values())) / (1 - ANKLE_HEIGHT)
     seen = [name for name, v in lengths.items() if np.isfinite(v)]
     if not seen:
         raise InputError("no shin, thigh or trunk of the person was seen by two cameras on "
