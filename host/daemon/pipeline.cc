@@ -119,10 +119,11 @@ void HostPipeline::SolvePeople(const SyncedFrame& f, std::vector<SolvedFrame>* o
     for (int c : s.cameras) used.cameras.push_back(CameraObservation{c, {}});
     const SuitCalibration* suit = s.suit >= 0 ? &session_.suits[s.suit].calibration : nullptr;
     if (suit) used.imus = suits[s.suit];
+    const Skeleton& skeleton =  // the solve's: a suit's before it is decided, as its leader's
+        s.skeleton >= 0 ? session_.suits[s.skeleton].calibration.skeleton : session_.skeleton;
     frames_failed_ += s.result.status == SolveStatus::kFailed;
-    v1::PoseFrame pose =
-        EncodePoseFrame(used, s.result, f.time_ns, index, suit ? suit->skeleton : session_.skeleton,
-                        session_.rig, suit ? suit->imus : std::vector<ImuSite>());
+    v1::PoseFrame pose = EncodePoseFrame(used, s.result, f.time_ns, index, skeleton, session_.rig,
+                                         suit ? suit->imus : std::vector<ImuSite>());
     pose.set_subject_id(s.id);
     out->push_back({std::move(pose), f.last_input_ns});
   }

@@ -102,7 +102,8 @@ void BindTracker(py::module_& m) {
       .def_readonly("result", &SubjectFrame::result)
       .def_readonly("cameras", &SubjectFrame::cameras)
       .def_readonly("born", &SubjectFrame::born)
-      .def_readonly("suit", &SubjectFrame::suit);
+      .def_readonly("suit", &SubjectFrame::suit)
+      .def_readonly("skeleton", &SubjectFrame::skeleton);
   py::class_<SubjectTracker>(m, "SubjectTracker")
       .def(py::init(&CreateTracker), py::arg("skeleton"), py::arg("rig"), py::arg("layout"),
            py::arg("prior") = py::none(), py::arg("options") = SolverOptions(),

@@ -146,7 +146,7 @@ std::vector<SubjectFrame> SubjectTracker::Track(
   for (const auto& s : subjects_) {
     std::vector<int> cameras;
     for (int p : s->views) cameras.push_back(people[p].camera);
-    out.push_back({s->id, s->result, cameras, s->born, s->solved_with});
+    out.push_back({s->id, s->result, cameras, s->born, s->solved_with, s->solved_skeleton});
   }
   return out;
 }
@@ -220,6 +220,7 @@ void SubjectTracker::SolveAll(double timestamp, const std::vector<CameraObservat
     const bool readings = s.suit >= 0 && !suits.empty() && !suits[s.suit].empty();
     s.solved = !s.views.empty() || readings;
     s.solved_with = readings ? s.suit : -1;
+    s.solved_skeleton = s.skeleton;
     if (!s.solved) {  // nobody to solve from: the last pose is held
       s.result = SolveResult{};
       s.result.status = SolveStatus::kNoObservations;
@@ -331,7 +332,7 @@ int SubjectTracker::Claim(const Eigen::Vector3d& centre, double timestamp,
   }
   Subject& s = *subjects_[lost];
   s.solver = std::move(solver), s.result = result, s.views = members, s.suit = -1,
-  s.solved_with = -1;
+  s.solved_with = -1, s.skeleton = -1, s.solved_skeleton = -1;
   s.solved = true;
   s.last_seen = timestamp, s.last_root = result.theta.head<3>();
   return lost;

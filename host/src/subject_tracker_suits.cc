@@ -38,24 +38,35 @@ void SubjectTracker::MatchSuits(double timestamp,
   }
   matcher_.Add(timestamp, bodies, readings);
   counts_.suit_changes = matcher_.changes();
+  const auto& wearers = matcher_.wearers();
+  const auto& leaders = matcher_.leaders();
   for (auto& s : subjects_) {
-    const auto& wearers = matcher_.wearers();
     const auto it = std::find(wearers.begin(), wearers.end(), s->id);
     const int suit = it == wearers.end() ? -1 : static_cast<int>(it - wearers.begin());
-    if (suit != s->suit) Dress(s.get(), suit);
+    int led = -1;  // an undecided suit it leads for
+    for (size_t k = 0; k < leaders.size() && suit < 0 && led < 0; ++k)
+      if (leaders[k] == s->id && !wearers[k]) led = static_cast<int>(k);
+    // Without a leader (its history restarted when a frame did not solve it), the last one's
+    // skeleton is kept while nobody else wears that suit.
+    const int kept = s->skeleton >= 0 && !wearers[s->skeleton] ? s->skeleton : -1;
+    const int skeleton = suit >= 0 ? suit : led >= 0 ? led : kept;
+    if (suit != s->suit || skeleton != s->skeleton) Dress(s.get(), suit, skeleton);
   }
 }
 
-// The subject is solved with the suit's calibration from the next frame on (-1: the
-// factory's, video only).
-void SubjectTracker::Dress(Subject* subject, int suit) {
+// The subject is solved from the next frame on with the suit's calibration and readings, or
+// (suit -1) from video alone with the skeleton and layout of the suit `skeleton` (-1: the
+// factory's).
+void SubjectTracker::Dress(Subject* subject, int suit, int skeleton) {
   std::string error;
-  const bool ok = suit >= 0
-                      ? subject->solver->SetCalibration(suits_[suit].skeleton, suits_[suit].layout,
-                                                        suits_[suit].imus, &error)
-                      : subject->solver->SetCalibration(reference_->skeleton(),
-                                                        reference_->layout(), {}, &error);
-  if (ok) subject->suit = suit;  // checked when the tracker was made: cannot fail
+  const std::vector<ImuSite> none;
+  const bool ok = skeleton >= 0 ? subject->solver->SetCalibration(
+                                      suits_[skeleton].skeleton, suits_[skeleton].layout,
+                                      suit >= 0 ? suits_[suit].imus : none, &error)
+                                : subject->solver->SetCalibration(
+                                      reference_->skeleton(), reference_->layout(), none, &error);
+  // checked when the tracker was made: cannot fail
+  if (ok) subject->suit = suit, subject->skeleton = skeleton;
 }
 
 }  // namespace mocap

@@ -9,7 +9,7 @@
 namespace mocap {
 namespace {
 
-constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
+constexpr double kLeadMargin = 0.01;  // rad: a leader beats every alternative by this
 constexpr int kChanceShifts = 8;  // chance: the suit's turns shifted by 1/8 ... 7/8 of the window
 constexpr double kChanceEvery = 0.25;  // s: how often a pair's chance is measured again
 constexpr int kChancePhases = 5;       // pairs measured again on as many different frames
@@ -42,6 +42,7 @@ SuitMatcher::SuitMatcher(std::vector<std::vector<int>> suit_bones, SuitMatchOpti
       options_(options),
       suit_history_(suit_bones_.size()),
       wearers_(suit_bones_.size(), 0),
+      leaders_(suit_bones_.size(), 0),
       decided_(suit_bones_.size(), 0) {
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument("SuitMatchOptions: " + error);
@@ -110,7 +111,7 @@ void SuitMatcher::Add(double timestamp, const std::map<uint32_t, BodyPose>& bodi
 void SuitMatcher::Forget(int suit, uint32_t id) {
   for (auto it = pairs_.begin(); it != pairs_.end();)
     it = it->first.first == suit || it->first.second == id ? pairs_.erase(it) : std::next(it);
-  if (suit >= 0 && suit < static_cast<int>(wearers_.size())) wearers_[suit] = 0;
+  if (suit >= 0 && suit < static_cast<int>(wearers_.size())) wearers_[suit] = leaders_[suit] = 0;
 }
 
 double SuitMatcher::MedianDifference(const Turned& suit, const Turned& body) {
@@ -152,10 +153,10 @@ bool SuitMatcher::Admissible(Pair& pair, double disagreement) const {
   return disagreement <= options_.lock_ratio * pair.chance;
 }
 
-std::map<uint32_t, double> SuitMatcher::Disagreements(int suit) const {
+std::map<uint32_t, double> SuitMatcher::Disagreements(int suit, int min_frames) const {
   std::map<uint32_t, double> out;
   for (const auto& [key, pair] : pairs_) {
-    if (key.first != suit || static_cast<int>(pair.frames.size()) < kMinMovingFrames) continue;
+    if (key.first != suit || static_cast<int>(pair.frames.size()) < min_frames) continue;
     const double d = Disagreement(pair, 0);
     if (std::isfinite(d)) out[key.second] = d;
   }
@@ -164,7 +165,8 @@ std::map<uint32_t, double> SuitMatcher::Disagreements(int suit) const {
 
 // Whether suit s's subject in the assignment `to` is clear: giving the suit to any other
 // subject instead (and that subject's suit, if any, to s's subject) costs at least the margin.
-bool SuitMatcher::Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to, int s) const {
+bool SuitMatcher::Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to, int s,
+                        double margin) const {
   const int j = to[s];
   for (int k = 0; k < cost.cols(); ++k) {
     if (k == j || !std::isfinite(cost(s, k))) continue;
@@ -175,7 +177,7 @@ bool SuitMatcher::Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to,
       if (!std::isfinite(cost(t, j))) continue;  // that swap is not possible
       alternative += cost(t, j) - cost(t, k);
     }
-    if (alternative < options_.margin_rad) return false;
+    if (alternative < margin) return false;
   }
   return true;
 }
@@ -186,22 +188,31 @@ void SuitMatcher::Decide(double timestamp) {
   // The admissible pairs' disagreements; every admissible pair may be made (the gate above
   // them all), the cheapest total among the most pairs.
   Eigen::MatrixXd cost = Eigen::MatrixXd::Constant(suit_bones_.size(), ids.size(), NAN);
+  Eigen::MatrixXd early = cost;  // the same before the window is full: the leaders
   std::vector<std::map<uint32_t, double>> admissible(suit_bones_.size());
-  double highest = options_.gate_rad;
+  double highest = options_.gate_rad, most = options_.gate_rad;
   std::vector<std::map<uint32_t, double>> measured(suit_bones_.size());
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
     measured[s] = Disagreements(static_cast<int>(s));
+    const std::map<uint32_t, double> glimpsed =
+        Disagreements(static_cast<int>(s), kMinLeadingFrames);
     for (const auto& [id, d] : measured[s])
       if (Admissible(pairs_.at({static_cast<int>(s), id}), d)) admissible[s][id] = d;
     for (size_t j = 0; j < ids.size(); ++j) {
-      const auto it = admissible[s].find(ids[j]);
+      const auto it = glimpsed.find(ids[j]);
+      if (it != glimpsed.end()) {  // the leader keeps its place unless beaten by the margin
+        early(s, j) = it->second - (leaders_[s] == ids[j] ? options_.margin_rad : 0.0);
+        most = std::max(most, it->second);
+      }
+      const auto ok = admissible[s].find(ids[j]);
       const Pair& pair = pairs_.at({static_cast<int>(s), ids[j]});
-      if (it == admissible[s].end() || timestamp - pair.first < options_.window_s) continue;
-      cost(s, j) = it->second;
-      highest = std::max(highest, it->second);
+      if (ok == admissible[s].end() || timestamp - pair.first < options_.window_s) continue;
+      cost(s, j) = ok->second;
+      highest = std::max(highest, ok->second);
     }
   }
   const std::vector<int> to = AssignRows(cost, 2 * highest);
+  const std::vector<int> led = AssignRows(early, 2 * most);  // every measured pair may lead
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
     uint32_t& wearer = wearers_[s];
     if (wearer && !subject_history_.count(wearer)) wearer = 0;  // retired
@@ -209,12 +220,17 @@ void SuitMatcher::Decide(double timestamp) {
       if (wearer && measured[s].count(wearer) && !admissible[s].count(wearer)) wearer = 0;
       continue;
     }
-    if (!Clear(cost, to, static_cast<int>(s)) || wearer == ids[to[s]]) continue;
+    if (!Clear(cost, to, static_cast<int>(s), options_.margin_rad) || wearer == ids[to[s]])
+      continue;
     wearer = ids[to[s]];
     // on someone else than its last wearer, who is still here
     if (decided_[s] && decided_[s] != wearer && subject_history_.count(decided_[s])) changes_++;
     decided_[s] = wearer;
   }
+  for (size_t s = 0; s < suit_bones_.size(); ++s)
+    leaders_[s] = wearers_[s]                                                          ? wearers_[s]
+                  : led[s] >= 0 && Clear(early, led, static_cast<int>(s), kLeadMargin) ? ids[led[s]]
+                                                                                       : 0;
 }
 
 }  // namespace mocap

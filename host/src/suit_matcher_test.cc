@@ -117,6 +117,23 @@ TEST_F(SuitMatcherTest, EachSuitIsFoundOnItsWearerOnceTheWindowIsFull) {
   EXPECT_EQ(matcher.changes(), 0u);
 }
 
+TEST_F(SuitMatcherTest, EachSuitLeadsForItsWearerLongBeforeItIsDecided) {
+  SuitMatcher matcher(Bones(), SuitMatchOptions{});
+  Run(&matcher, 0, SuitMatcher::kMinLeadingFrames + 6, {2, 0});  // 0.1 s of turns, then a few
+  EXPECT_EQ(matcher.wearers(), (std::vector<uint32_t>{0, 0}));
+  EXPECT_EQ(matcher.leaders(), (std::vector<uint32_t>{3, 1}));
+  Run(&matcher, SuitMatcher::kMinLeadingFrames + 6, 130, {2, 0});
+  EXPECT_EQ(matcher.leaders(), matcher.wearers());
+  matcher.Forget(0, 3);  // a suit taken off leads for nobody until measured again
+  EXPECT_EQ(matcher.leaders()[0], 0u);
+}
+
+TEST_F(SuitMatcherTest, NobodyLeadsWhileEveryoneStandsStill) {
+  SuitMatcher matcher(Bones(), SuitMatchOptions{});
+  Run(&matcher, 0, 300, {2, 0}, 0.0);
+  EXPECT_EQ(matcher.leaders(), (std::vector<uint32_t>{0, 0}));
+}
+
 TEST_F(SuitMatcherTest, NothingIsDecidedWhileEveryoneStandsStill) {
   SuitMatcher matcher(Bones(), SuitMatchOptions{});
   Run(&matcher, 0, 300, {2, 0}, 0.0);

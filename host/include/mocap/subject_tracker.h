@@ -13,7 +13,10 @@
 //     never used again.
 //  5. Suits: which subject wears which suit of IMUs is found from motion (SuitMatcher); a
 //     subject wearing one is solved with the suit's calibration (its skeleton, layout and
-//     IMU sites) and readings from the next frame on, the others from video alone. A suit
+//     IMU sites) and readings from the next frame on, the others from video alone. Until a
+//     suit is decided, the subject it agrees with best so far (its leader) is solved with its
+//     skeleton and layout, not its readings: a performer's proportions from the start, at
+//     worst another performer's instead of the session's default. A suit
 //     whose readings the keypoints contradict (half its sensors distrusted by the solver's
 //     slip monitor: a suit on another person than decided) is taken off and decided again.
 #ifndef MOCAP_SUBJECT_TRACKER_H_
@@ -56,6 +59,7 @@ struct SubjectFrame {
   std::vector<int> cameras;  // the views assigned to it this frame
   bool born = false;         // this frame is its first
   int suit = -1;             // the suit whose readings this frame's solve had, -1 for none
+  int skeleton = -1;  // the suit whose calibration's skeleton and layout it had, -1: the session's
 };
 
 // A suit of IMUs and the calibration of its wearer: the skeleton, the keypoint layout on it,
@@ -113,9 +117,11 @@ class SubjectTracker {
     std::vector<int> views;  // indices into this frame's people
     SolveResult result;
     bool born = false;
-    int suit = -1;         // the suit it is solved with
-    int solved_with = -1;  // the suit this frame's solve had
-    bool solved = false;   // this frame
+    int suit = -1;             // the suit it is solved with
+    int solved_with = -1;      // the suit this frame's solve had
+    int skeleton = -1;         // the suit whose skeleton it is solved with (see Dress)
+    int solved_skeleton = -1;  // this frame's
+    bool solved = false;       // this frame
   };
   struct Candidate {
     Eigen::Vector3d centre;
@@ -130,7 +136,7 @@ class SubjectTracker {
   void SolveAll(double timestamp, const std::vector<CameraObservation>& people,
                 const std::vector<std::vector<ImuObservation>>& suits);
   void MatchSuits(double timestamp, const std::vector<std::vector<ImuObservation>>& suits);
-  void Dress(Subject* subject, int suit);
+  void Dress(Subject* subject, int suit, int skeleton);
   static std::vector<std::vector<int>> SuitBones(const std::vector<SuitCalibration>& suits);
   void Births(double timestamp, const std::vector<CameraObservation>& people,
               const std::vector<int>& admitted, std::vector<int>* owner);

@@ -56,9 +56,14 @@ class SuitMatcher {
 
   // Per suit: the id of the subject wearing it, 0 while undecided or on nobody.
   const std::vector<uint32_t>& wearers() const { return wearers_; }
+  // Per suit: the subject it is on by the least disagreement so far (its wearer once decided),
+  // before the window is full and whatever the margin; 0 for none. A guess, not a decision.
+  const std::vector<uint32_t>& leaders() const { return leaders_; }
   // Per suit: its mean disagreement (rad) with each subject over the window, by id; only
-  // pairs with enough moving frames.
-  std::map<uint32_t, double> Disagreements(int suit) const;
+  // pairs with at least min_frames moving frames (default: enough to decide on).
+  std::map<uint32_t, double> Disagreements(int suit, int min_frames = kMinMovingFrames) const;
+  static constexpr int kMinMovingFrames = 20;  // in the window, for a pair's disagreement to count
+  static constexpr int kMinLeadingFrames = 4;  // for a leader: a guess
   // How many times a suit was decided for another subject than its last wearer while that
   // one was still tracked: a suit found on someone else than it was believed to be on.
   uint64_t changes() const { return changes_; }
@@ -91,7 +96,7 @@ class SuitMatcher {
   // (NaN where either reading is missing); false when the history is too short.
   bool Turns(const std::deque<Timed>& history, const Timed& now, std::vector<double>* angles) const;
   void Decide(double timestamp);
-  bool Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to, int s) const;
+  bool Clear(const Eigen::MatrixXd& cost, const std::vector<int>& to, int s, double margin) const;
 
   std::vector<std::vector<int>> suit_bones_;
   SuitMatchOptions options_;
@@ -99,6 +104,7 @@ class SuitMatcher {
   std::map<uint32_t, std::vector<std::deque<Timed>>> subject_history_;  // per subject, per suit
   std::map<std::pair<int, uint32_t>, Pair> pairs_;                      // (suit, subject id)
   std::vector<uint32_t> wearers_;
+  std::vector<uint32_t> leaders_;
   std::vector<uint32_t> decided_;  // per suit: the last wearer decided (0: none yet)
   uint64_t changes_ = 0;
   unsigned pairs_born_ = 0;

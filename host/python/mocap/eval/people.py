@@ -5,8 +5,9 @@ suit and cameras, nobody else on the stage) to compare with.
 
 Each performer wears a suit of IMUs of their own, calibrated (the oracle calibration: their
 skeleton, the layout on it, the sensors' true sites), which the tracker finds on them from
-motion; until then, or without suits (`suits=False`), a subject is solved from video with the
-default skeleton and the layout on it. Errors are over the 13 anatomical joint centres
+motion; until then a subject is solved from video with the skeleton and layout of the suit
+leading for it (the default ones before any does, and always without suits, `suits=False`).
+Errors are over the 13 anatomical joint centres
 (mocap.model.joint_centres), which every skeleton agrees on.
 Scoring, per frame: the subjects tracked are matched to the performers by the least total
 mean joint-centre distance, a pair made only within MATCH_M; a performer's identity swaps
@@ -55,8 +56,9 @@ def worn_by(scene: sim_people.Scene, swap_at_s: float | None = None) -> np.ndarr
 
 def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOptions | None = None,
           wall_ms: list | None = None, worn: np.ndarray | None = None) -> tuple[list[dict], dict]:
-    """Per frame the subjects tracked ({id: (theta, cameras, suit)}: suit, the performer whose
-    suit's readings the solve had, -1 for none), and the tracker's counts. suits: each
+    """Per frame the subjects tracked ({id: (centres, cameras, suit)}: the solved joint centres
+    (J, 3), through the skeleton the solve had; suit, the performer whose suit's readings the
+    solve had, -1 for none), and the tracker's counts. suits: each
     performer has a suit calibrated on them (the oracle calibration: their skeleton, the layout
     on it, the true sensor sites), worn as `worn` says (worn_by; default their own); wall_ms,
     when given, receives each frame's track time."""
@@ -76,7 +78,8 @@ def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOp
         subjects, _ = tracker.track(float(time), cameras, keypoints, quaternions, accelerations)
         if wall_ms is not None:
             wall_ms.append(1e3 * (_time.perf_counter() - start))
-        frames.append({s.id: (np.array(s.result.theta), list(s.cameras), s.suit) for s in subjects})
+        frames.append({s.id: (_centres(scene.performers[s.skeleton].skeleton if s.skeleton >= 0 else skeleton,
+                                       np.array(s.result.theta)), list(s.cameras), s.suit) for s in subjects})
     return frames, tracker.counts
 
 
@@ -105,13 +108,16 @@ def write_session(scene: sim_people.Scene, folder: Path, suits: bool, inputs: li
 
 def by_frame(scene: sim_people.Scene, poses: list, offset_ns: int = 0) -> list[dict]:
     """PoseFrames of the scene (capture times moved by offset_ns) as track() gives frames:
-    {subject_id: (theta, cameras, suit)}, suit the performer whose suit's sensors it lists."""
+    {subject_id: (centres, cameras, suit)}, the centres of the PoseFrame's joints, suit the
+    performer whose suit's sensors it lists."""
     index = {t + offset_ns: f for f, t in enumerate(sim_messages.frame_times_ns(scene.performers[0]))}
     frames: list[dict] = [{} for _ in scene.persons]
     for pose in poses:
         if pose.capture_time_ns in index:
             suit = sim_messages.suit_of_sensor(pose.imus[0]) if pose.imus else -1
-            frames[index[pose.capture_time_ns]][pose.subject_id] = (np.array(pose.theta), list(pose.cameras), suit)
+            joints = {j.name: (j.px, j.py, j.pz) for j in pose.joints}
+            centres = np.array([joints[b] for b in joint_centres.JOINTS.values()])
+            frames[index[pose.capture_time_ns]][pose.subject_id] = (centres, list(pose.cameras), suit)
     return frames
 
 
@@ -158,12 +164,10 @@ def score(scene: sim_people.Scene, frames: list[dict], worn: np.ndarray | None =
     identity swaps, and which suit the matched subject's solve had: the one they wear (worn:
     worn_by) from which second on, and on how many frames another one."""
     worn = worn_by(scene) if worn is None else worn
-    nominal_skeleton, _ = nominal(scene.performers[0].layout.name)
     truth = [[_centres(t.skeleton, th) for th in t.thetas] for t in scene.performers]
     matched = [[] for _ in scene.performers]  # per performer: (frame, error m, id, suit)
     for f, subjects in enumerate(frames):
-        seen = {i: (_centres(scene.performers[suit].skeleton if suit >= 0 else nominal_skeleton, theta), suit)
-                for i, (theta, cameras, suit) in subjects.items() if cameras}
+        seen = {i: (centres, suit) for i, (centres, cameras, suit) in subjects.items() if cameras}
         order = list(seen)
         distance = np.array([[np.linalg.norm(seen[i][0] - truth[p][f], axis=1).mean() for i in order]
                              for p in range(len(truth))]).reshape(len(truth), len(order))
