@@ -79,3 +79,13 @@ def test_the_command_writes_each_bones_floor_beside_the_solve(shared, tmp_path):
     assert len(result["solve_deg"]) == 21
     # the solve holds a sensed bone within a few degrees of its sensor's own error
     assert result["solve_deg"]["thigh_l"] < result["sensors_deg"]["thigh_l"] + 2.0
+
+
+def test_the_command_refuses_options_the_floors_would_ignore(shared, tmp_path, capsys):
+    from mocap.cli.main import main
+
+    base = ["eval", "--floors", "--motion", str(shared / CLIP), "--json", str(tmp_path / "f.json")]
+    assert main([*base, "--bend", "foot_l:x:90"]) == 2
+    assert main([*base, "--site-offsets", "off", "--slip", "forearm_l:4:z:60"]) == 2
+    assert "not --slip, --site-offsets off" in capsys.readouterr().err
+    assert not (tmp_path / "f.json").exists()

@@ -120,6 +120,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _floors(args: argparse.Namespace, clips: list[Path]) -> int:
+    other = {"--bend": args.bend, "--slip": args.slip, "--site-offsets off": args.site_offsets == "off",
+             "--omit": args.omit, "--baseline": args.baseline, "--cameras-lost-at": args.cameras_lost_at is not None}
+    given = [name for name, value in other.items() if value]
+    if given:  # the floors are of the simulation as it is; these would change only the solve
+        raise InputError(f"--floors takes --preset, --cameras, --seed and --set, not {', '.join(given)}")
     config = take.Config(preset=args.preset, cameras=args.cameras)
     results = []
     for clip in clips:
