@@ -56,8 +56,9 @@ class SuitMatcher {
 
   // Per suit: the id of the subject wearing it, 0 while undecided or on nobody.
   const std::vector<uint32_t>& wearers() const { return wearers_; }
-  // Per suit: the subject it is on by the least disagreement so far (its wearer once decided),
-  // before the window is full and whatever the margin; 0 for none. A guess, not a decision.
+  // Per suit: the subject it is on by the least disagreement so far (its wearer once decided):
+  // from kMinLeadingFrames moving frames, admissible or not, beating every alternative by
+  // 0.01 rad (the current leader favoured by margin_rad); 0 for none. A guess, not a decision.
   const std::vector<uint32_t>& leaders() const { return leaders_; }
   // Per suit: its mean disagreement (rad) with each subject over the window, by id; only
   // pairs with at least min_frames moving frames (default: enough to decide on).
