@@ -7,7 +7,6 @@ import argparse
 import json
 from pathlib import Path
 
-from mocap.errors import InputError
 from mocap.eval import balancing_take, real_trial
 from mocap.io.demo_data import fetch_trial
 
@@ -22,7 +21,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     ee.add_argument("--self-calibrate", metavar="HEIGHT", type=float, default=None,
                     help="with --take-solve: the take's cameras calibrated from its own detections (`mocap "
                     "calibrate-rig`, the person HEIGHT metres tall) instead of the trial's board calibration; "
-                    "the joints are compared in the board's world (the camera centres' similarity), and the rigs too")
+                    "the joints are compared in the board's world (the camera centres' similarity), and the rigs "
+                    "too. Without --take-solve: the cameras also calibrated from the detector's keypoints, "
+                    "compared with the board's")
     ee.add_argument("--set", action="append", default=[], metavar="OPTION=VALUE",
                     help="a solver option of the video-only solve (with --take-solve: of the solve after the "
                     "calibration), e.g. motion.enabled=false (repeatable)")
@@ -30,14 +31,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.self_calibrate is not None and not args.take_solve:
-        raise InputError("--self-calibrate goes with --take-solve OUT")
     if args.take_solve and args.self_calibrate is not None:
         result = balancing_take.evaluate_self_calibrated(fetch_trial(), Path(args.take_solve), args.self_calibrate,
                                                          args.set)
     elif args.take_solve:
         result = balancing_take.evaluate(fetch_trial(), Path(args.take_solve), args.set)
     else:
-        result = real_trial.evaluate(fetch_trial(), args.set)
+        result = real_trial.evaluate(fetch_trial(), args.set, args.self_calibrate)
     print(json.dumps(result, indent=1), flush=True)
     return 0

@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from mocap import _core, paths
+from mocap.calibration.rig import calibrate as rig_calibrate
+from mocap.calibration.rig import compare as rig_compare
 from mocap.eval import edge_detector
 from mocap.io import calib_toml
 from mocap.io.demo_data import TRIAL
@@ -112,19 +114,41 @@ def jitter(x: np.ndarray, rate: float = RATE) -> float:
     return float(np.nanmean(np.linalg.norm(x[2:] - 2 * x[1:-1] + x[:-2], axis=-1)) * rate**2)
 
 
-def evaluate(trial: Path, settings: Sequence[str] = ()) -> dict:
-    """`mocap eval-edge`: the edge detector's PCK and speed (mocap.eval.edge_detector)
-    and the video-only solve of its keypoints (with these solver settings) against Pose2Sim's TRC."""
-    videos = edge_detector.load_trial(trial)
-    model = edge_detector.BlazePose()
-    found, speed = edge_detector.run(model, videos)
-    naive, naive_speed = edge_detector.run(edge_detector.whole_image(model), videos, pack=False)
-    keypoints = np.zeros((len(found), len(videos[edge_detector.CAMERAS[0]]), 33, 3))
+def self_calibrated(trial: Path, keypoints: np.ndarray, height_m: float) -> dict:
+    """The cameras' poses from keypoints (C, F, 33, 3) of the person alone (`mocap calibrate-rig`,
+    the person height_m tall; the board's intrinsics), against the trial's board calibration."""
+    board = calib_toml.load(trial / "Calib_qualisys.toml")
+    people = [[k[None] if k[:, 2].any() else np.zeros((0,) + k.shape) for k in camera] for camera in keypoints]
+    rig, report = rig_calibrate.calibrate(list(board.cameras), people, "blazepose33", RATE, height_m)
+    found = rig_compare.compare(rig, board)
+    return {"height_m": height_m, "up_from": report["up_from"],
+            "reprojection_px_median": report["reprojection_px_median"],
+            **{k: found[k] for k in ("position_cm_max", "orientation_deg_max", "scale_error_pct", "up_deg")}}
+
+
+def detected(found: dict[int, list], frames: int) -> np.ndarray:
+    """(C, F, 33, 3) the tracked person's keypoints per camera and frame, 0 where none."""
+    keypoints = np.zeros((len(found), frames, 33, 3))
     for i, c in enumerate(edge_detector.CAMERAS):
         for f, person in enumerate(found[c]):
             if person is not None:
                 keypoints[i, f] = person.keypoints
+    return keypoints
+
+
+def evaluate(trial: Path, settings: Sequence[str] = (), height_m: float | None = None) -> dict:
+    """`mocap eval-edge`: the edge detector's PCK and speed (mocap.eval.edge_detector)
+    and the video-only solve of its keypoints (with these solver settings) against Pose2Sim's TRC;
+    with height_m, also the rig calibrated from those keypoints against the board's."""
+    videos = edge_detector.load_trial(trial)
+    model = edge_detector.BlazePose()
+    found, speed = edge_detector.run(model, videos)
+    naive, naive_speed = edge_detector.run(edge_detector.whole_image(model), videos, pack=False)
+    keypoints = detected(found, len(videos[edge_detector.CAMERAS[0]]))
     openpose = [edge_detector.openpose_subjects(trial, c) for c in edge_detector.CAMERAS]
-    return {"detector_tracked": edge_detector.pck(trial, found) | speed,
-            "detector_naive": edge_detector.pck(trial, naive) | naive_speed,
-            "video_only_solve": solve(trial, keypoints, openpose, settings)}
+    result = {"detector_tracked": edge_detector.pck(trial, found) | speed,
+              "detector_naive": edge_detector.pck(trial, naive) | naive_speed,
+              "video_only_solve": solve(trial, keypoints, openpose, settings)}
+    if height_m is not None:
+        result["self_calibration"] = self_calibrated(trial, keypoints, height_m)
+    return result
