@@ -193,9 +193,11 @@ void SuitMatcher::Decide(double timestamp) {
   double highest = options_.gate_rad, most = options_.gate_rad;
   std::vector<std::map<uint32_t, double>> measured(suit_bones_.size());
   for (size_t s = 0; s < suit_bones_.size(); ++s) {
-    measured[s] = Disagreements(static_cast<int>(s));
     const std::map<uint32_t, double> glimpsed =
         Disagreements(static_cast<int>(s), kMinLeadingFrames);
+    for (const auto& [id, d] : glimpsed)  // the pairs measured enough to decide on
+      if (pairs_.at({static_cast<int>(s), id}).frames.size() >= kMinMovingFrames)
+        measured[s][id] = d;
     for (const auto& [id, d] : measured[s])
       if (Admissible(pairs_.at({static_cast<int>(s), id}), d)) admissible[s][id] = d;
     for (size_t j = 0; j < ids.size(); ++j) {

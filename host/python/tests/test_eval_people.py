@@ -51,25 +51,17 @@ def test_each_subject_has_its_performers_skeleton_long_before_its_suit_is_decide
     """A suit leads for the subject it agrees with best from a few moving frames on: that
     subject is solved with the suit's skeleton and layout (not its readings) until the suit is
     decided on it, 2 s after its birth, then with its readings too."""
-    from mocap import _core
-    from mocap.model import prior as pose_prior
     from mocap.sim import people as sim_people
 
     scene = sim_people.simulate([shared / "data/mocap" / c for c in CLIPS], 3, 3.0, Config(), np.random.default_rng(0))
     first = scene.performers[0]
-    skeleton, layout = people.nominal(first.layout.name)
-    tracker = _core.SubjectTracker(skeleton, first.rig, layout, pose_prior.load(), _core.SolverOptions(),
-                                   _core.TrackerOptions(), [(t.skeleton, t.layout, t.imus) for t in scene.performers])
+    _, per_frame = people.run_tracker(scene)
     seen = [[] for _ in scene.performers]  # per performer: (time, skeleton, suit) of its subject
-    for f, (time, persons) in enumerate(zip(first.times, scene.persons)):
-        cameras = [c for c, found in enumerate(persons) for _ in found]
-        keypoints = np.array([k for found in persons for k in found]).reshape(len(cameras), len(layout), 3)
-        subjects, _ = tracker.track(float(time), cameras, keypoints, [t.quaternions[f] for t in scene.performers],
-                                    [t.accelerations[f] for t in scene.performers])
+    for f, subjects in enumerate(per_frame):
         for s in subjects:
             near = [np.linalg.norm(np.array(s.result.theta[:2]) - t.thetas[f, :2]) for t in scene.performers]
             if min(near) < 0.5:
-                seen[int(np.argmin(near))].append((time - first.times[0], s.skeleton, s.suit))
+                seen[int(np.argmin(near))].append((first.times[f] - first.times[0], s.skeleton, s.suit))
     for p, rows in enumerate(seen):
         own = [t for t, skeleton, _ in rows if skeleton == p]
         worn = [t for t, _, suit in rows if suit == p]

@@ -54,14 +54,12 @@ def worn_by(scene: sim_people.Scene, swap_at_s: float | None = None) -> np.ndarr
     return out
 
 
-def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOptions | None = None,
-          wall_ms: list | None = None, worn: np.ndarray | None = None) -> tuple[list[dict], dict]:
-    """Per frame the subjects tracked ({id: (centres, cameras, suit)}: the solved joint centres
-    (J, 3), through the skeleton the solve had; suit, the performer whose suit's readings the
-    solve had, -1 for none), and the tracker's counts. suits: each
-    performer has a suit calibrated on them (the oracle calibration: their skeleton, the layout
-    on it, the true sensor sites), worn as `worn` says (worn_by; default their own); wall_ms,
-    when given, receives each frame's track time."""
+def run_tracker(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOptions | None = None,
+                wall_ms: list | None = None, worn: np.ndarray | None = None) -> tuple[_core.SubjectTracker, list]:
+    """The scene through a SubjectTracker of the nominal skeleton: the tracker and every frame's
+    SubjectFrames. suits: each performer has a suit calibrated on them (the oracle calibration:
+    their skeleton, the layout on it, the true sensor sites), worn as `worn` says (worn_by;
+    default their own); wall_ms, when given, receives each frame's track time."""
     first = scene.performers[0]
     skeleton, layout = nominal(first.layout.name)
     calibrations = [(t.skeleton, t.layout, t.imus) for t in scene.performers] if suits else []
@@ -78,8 +76,20 @@ def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOp
         subjects, _ = tracker.track(float(time), cameras, keypoints, quaternions, accelerations)
         if wall_ms is not None:
             wall_ms.append(1e3 * (_time.perf_counter() - start))
-        frames.append({s.id: (_centres(scene.performers[s.skeleton].skeleton if s.skeleton >= 0 else skeleton,
-                                       np.array(s.result.theta)), list(s.cameras), s.suit) for s in subjects})
+        frames.append(subjects)
+    return tracker, frames
+
+
+def track(scene: sim_people.Scene, suits: bool = True, tracking: _core.TrackerOptions | None = None,
+          wall_ms: list | None = None, worn: np.ndarray | None = None) -> tuple[list[dict], dict]:
+    """Per frame the subjects tracked ({id: (centres, cameras, suit)}: the solved joint centres
+    (J, 3), through the skeleton the solve had; suit, the performer whose suit's readings the
+    solve had, -1 for none), and the tracker's counts (run_tracker says the rest)."""
+    tracker, per_frame = run_tracker(scene, suits, tracking, wall_ms, worn)
+    default, _ = nominal(scene.performers[0].layout.name)
+    frames = [{s.id: (_centres(scene.performers[s.skeleton].skeleton if s.skeleton >= 0 else default,
+                               np.array(s.result.theta)), list(s.cameras), s.suit) for s in subjects}
+              for subjects in per_frame]
     return frames, tracker.counts
 
 
